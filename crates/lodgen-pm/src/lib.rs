@@ -1,0 +1,1 @@
+//! lodgen-pm: progressive meshes by pair contraction.

@@ -1,0 +1,101 @@
+//! The neutral in-memory form shared by the readers (`io`), the LOD builder
+//! (`lod`) and the glTF writer (`gltf_out`). Readers produce a [`Scene`];
+//! the builder turns every [`SourceMesh`] into a [`LodMesh`]; the writer
+//! serializes `Scene` + `Vec<LodMesh>`.
+//!
+//! This module owns data only: no I/O, no simplification.
+
+use std::path::PathBuf;
+
+/// Everything read from one input file.
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    /// Meshes in file order. For glTF input, `meshes[i]` is glTF mesh `i`.
+    pub meshes: Vec<SourceMesh>,
+    /// Materials by index; primitives refer to them by index.
+    pub materials: Vec<Material>,
+    /// Where the scene came from; the glTF writer uses it to keep the
+    /// input's node hierarchy, transforms, materials and textures.
+    pub origin: Origin,
+}
+
+/// The input file a [`Scene`] was read from.
+#[derive(Debug, Clone, Default)]
+pub enum Origin {
+    /// OBJ, PLY, SMF or a mesh generated in code: one node per mesh.
+    #[default]
+    Flat,
+    /// glTF / GLB: the parsed document and its binary buffers, so the writer
+    /// can copy nodes, transforms, materials, images and samplers.
+    Gltf {
+        /// Path of the input file (for resolving relative image URIs).
+        path: PathBuf,
+        /// The input document, as parsed JSON root.
+        document: Box<gltf_json::Root>,
+        /// The contents of every buffer, in buffer order.
+        buffers: Vec<Vec<u8>>,
+    },
+}
+
+/// A named material (OBJ `usemtl`, glTF material).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Material {
+    pub name: String,
+    /// Base colour factor, RGBA, linear. `None` when the source has none.
+    pub base_color: Option<[f32; 4]>,
+}
+
+/// One mesh: a name and its primitives (one per material).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SourceMesh {
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+}
+
+/// An indexed triangle list with optional per-vertex attributes. Every
+/// attribute vector, when present, has `positions.len()` entries.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Primitive {
+    /// Index into [`Scene::materials`].
+    pub material: Option<usize>,
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub texcoords: Option<Vec<[f32; 2]>>,
+    /// Triangle list: `indices.len() % 3 == 0`, every index `< positions.len()`.
+    pub indices: Vec<u32>,
+}
+
+impl Primitive {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// The LOD chain of one [`SourceMesh`]: `levels[0]` is the finest.
+#[derive(Debug, Clone, Default)]
+pub struct LodMesh {
+    /// Index of the source mesh in [`Scene::meshes`].
+    pub source: usize,
+    pub name: String,
+    pub levels: Vec<LodLevel>,
+}
+
+/// One level of detail: its primitives plus what was measured on it.
+#[derive(Debug, Clone, Default)]
+pub struct LodLevel {
+    /// Same primitive order and materials as the source mesh.
+    pub primitives: Vec<Primitive>,
+    /// Measured symmetric Hausdorff distance to the original mesh, as a
+    /// fraction (not percent) of the original's bounding-box diagonal.
+    pub hausdorff: f64,
+    /// Measured symmetric RMS distance, fraction of the bbox diagonal.
+    pub rms: f64,
+    /// `MSFT_screencoverage` value for this level (see ARCHITECTURE.md).
+    pub screen_coverage: f64,
+}
+
+impl LodLevel {
+    pub fn triangle_count(&self) -> usize {
+        self.primitives.iter().map(Primitive::triangle_count).sum()
+    }
+}
