@@ -1,1 +1,73 @@
-//! lodgen-pm: progressive meshes by pair contraction.
+//! lodgen-pm: progressive meshes by Garland–Heckbert pair contraction, with
+//! every contraction recorded as a Hoppe vertex split.
+//!
+//! ```
+//! use lodgen_pm::{simplify, SimplifyOptions};
+//! // a flat 3×3 grid of quads
+//! let mut positions = Vec::new();
+//! for y in 0..4 { for x in 0..4 { positions.push([x as f32, y as f32, 0.0]); } }
+//! let mut indices = Vec::new();
+//! for y in 0..3u32 { for x in 0..3u32 {
+//!     let i = y * 4 + x;
+//!     indices.extend_from_slice(&[i, i + 1, i + 5, i, i + 5, i + 4]);
+//! } }
+//! let out = simplify(&positions, &indices, &SimplifyOptions::DEFAULT.with_target_triangles(2)).unwrap();
+//! assert_eq!(out.pm.base.triangles.len(), 2);
+//! // the whole sequence M_n … M_g is there: refine back to the input
+//! assert_eq!(out.pm.mesh_at(usize::MAX).triangles.len(), 18);
+//! ```
+//!
+//! The crate does no I/O and never prints. See ARCHITECTURE.md for the data
+//! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
+//! levels.
+
+pub mod collapse;
+pub mod levels;
+pub mod mesh;
+pub mod options;
+pub mod pairs;
+pub mod quadric;
+pub mod shapes;
+pub mod vsplit;
+
+pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
+pub use glam;
+pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
+pub use options::{Boundary, Placement, SimplifyOptions, Tau};
+pub use vsplit::{Corner, Cursor, ProgressiveMesh, VertexSplit};
+
+/// A simplification's result: the progressive mesh (numbered as in
+/// [`vsplit`]), what preparation removed, what the loop did, and why it
+/// stopped.
+#[derive(Clone, Debug)]
+pub struct Simplified {
+    pub pm: ProgressiveMesh,
+    /// Input vertex → welded vertex (`u32::MAX` if unused); the progressive
+    /// mesh's `vertex_origin` maps into the welded numbering.
+    pub vertex_map: Vec<u32>,
+    /// Welded triangle → input triangle.
+    pub triangle_map: Vec<u32>,
+    pub prepare: PrepareStats,
+    pub stats: Stats,
+    pub stop: StopReason,
+}
+
+/// Prepare (validate, weld, clean) and simplify an indexed triangle list.
+pub fn simplify(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    opts: &SimplifyOptions,
+) -> Result<Simplified, MeshError> {
+    let prepared = prepare(positions, indices)?;
+    let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let stop = s.run();
+    let (pm, stats) = s.finish();
+    Ok(Simplified {
+        pm,
+        vertex_map: prepared.vertex_map,
+        triangle_map: prepared.triangle_map,
+        prepare: prepared.stats,
+        stats,
+        stop,
+    })
+}

@@ -1,0 +1,766 @@
+//! The contraction loop (GH97 §3–4): per-vertex quadrics, candidate pairs in
+//! a heap keyed on cost, legality checks, contraction, and one
+//! [`Contraction`] record per step for the vertex-split log.
+//!
+//! Owns [`Simplifier`], [`Stats`], [`Rejections`], [`StopReason`]. Pair
+//! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
+//! form in `vsplit`.
+
+use crate::mesh::{Mesh, MeshError};
+use crate::options::{Boundary, Placement, SimplifyOptions};
+use crate::pairs;
+use crate::quadric::Quadric;
+use crate::vsplit::{Contraction, Corner, ProgressiveMesh};
+use glam::DVec3;
+use rayon::prelude::*;
+use smallvec::SmallVec;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::time::{Duration, Instant};
+
+/// A moved triangle whose new normal is turned more than ≈75.5° from its old
+/// one (cos < 0.25) counts as flipped. A pure 90° test (cos < 0) lets chains
+/// of collapses that each turn a face by 80–89° fold the surface over.
+pub const FLIP_MIN_COS: f64 = 0.25;
+
+/// A moved triangle whose area shrinks below this fraction of its old area
+/// (squared-normal ratio 1e-12 ≈ area ratio 1e-6) becomes a sliver that
+/// breaks normals and later flip tests.
+pub const DEGENERATE_AREA_RATIO_SQ: f64 = 1e-12;
+
+/// Why a candidate contraction was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rejected {
+    /// Both vertices are locked (boundary lock, non-manifold).
+    Locked,
+    /// The link condition fails: the one-rings share a vertex that is not
+    /// opposite the edge (the result would be non-manifold).
+    Link,
+    /// Two border vertices joined by an interior edge (would pinch).
+    BoundaryPinch,
+    /// A moved triangle's normal turns by more than the flip threshold.
+    Flip,
+    /// A moved triangle would lose (nearly) all its area.
+    Degenerate,
+    /// A moved triangle would land on an existing one: a tetrahedron or a
+    /// small closed component flattening into a double-sided sheet.
+    Duplicate,
+    /// The contraction's error exceeds `max_error`.
+    Error,
+}
+
+/// Rejections counted by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rejections {
+    pub locked: usize,
+    pub link: usize,
+    pub boundary_pinch: usize,
+    pub flip: usize,
+    pub degenerate: usize,
+    pub duplicate: usize,
+    pub error: usize,
+}
+
+impl Rejections {
+    fn count(&mut self, r: Rejected) {
+        *match r {
+            Rejected::Locked => &mut self.locked,
+            Rejected::Link => &mut self.link,
+            Rejected::BoundaryPinch => &mut self.boundary_pinch,
+            Rejected::Flip => &mut self.flip,
+            Rejected::Degenerate => &mut self.degenerate,
+            Rejected::Duplicate => &mut self.duplicate,
+            Rejected::Error => &mut self.error,
+        } += 1;
+    }
+
+    pub fn total(&self) -> usize {
+        self.locked
+            + self.link
+            + self.boundary_pinch
+            + self.flip
+            + self.degenerate
+            + self.duplicate
+            + self.error
+    }
+}
+
+/// Wall time per phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Adjacency, boundary and non-manifold classification, quadrics.
+    pub setup: Duration,
+    /// Edge and τ-pair discovery.
+    pub pairs: Duration,
+    /// Initial costs and heap construction.
+    pub heap: Duration,
+    /// The contraction loop.
+    pub collapse: Duration,
+    /// Renumbering the log into the progressive mesh.
+    pub log: Duration,
+}
+
+/// What a simplification did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stats {
+    pub input_vertices: usize,
+    pub input_triangles: usize,
+    pub output_vertices: usize,
+    pub output_triangles: usize,
+    pub collapses: usize,
+    /// Non-edge pairs within τ at the start.
+    pub near_pairs: usize,
+    pub boundary_vertices: usize,
+    /// Vertices that never move (non-manifold, or boundary with
+    /// `Boundary::Locked`).
+    pub locked_vertices: usize,
+    pub rejected: Rejections,
+    pub time: PhaseTimes,
+}
+
+/// Why the loop stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// The triangle target was reached.
+    Target,
+    /// Every remaining candidate's error exceeds `max_error`.
+    MaxError,
+    /// No legal candidate is left (all locked or every contraction
+    /// illegal) before the target: the stats say why.
+    Exhausted,
+}
+
+/// A heap entry: a pair's cost, stamped with both vertices' versions. It is
+/// stale once either vertex has changed since.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    cost: f64,
+    a: u32,
+    b: u32,
+    va: u32,
+    vb: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Entry {
+    /// Reversed (min-heap) total order: cost, then vertex ids. Deterministic
+    /// across runs and platforms.
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.cost
+            .total_cmp(&self.cost)
+            .then(o.a.cmp(&self.a))
+            .then(o.b.cmp(&self.b))
+    }
+}
+
+/// A read-only view of the simplifier's current mesh, in the welded input's
+/// numbering (for tests and debugging).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    /// All vertices' current positions (removed ones keep their last).
+    pub positions: Vec<[f32; 3]>,
+    /// `(input triangle id, corners)` of every live triangle, by id.
+    pub triangles: Vec<(u32, [u32; 3])>,
+}
+
+/// The GH97 pair-contraction engine. `new`, then `step` until it returns
+/// `Err(StopReason)` (or call `run`), then `finish`.
+pub struct Simplifier {
+    opts: SimplifyOptions,
+    target: usize,
+    pos: Vec<[f32; 3]>,
+    quadric: Vec<Quadric>,
+    tris: Vec<[u32; 3]>,
+    tri_alive: Vec<bool>,
+    /// Vertex → incident triangles; may hold dead triangles (skipped).
+    vtris: Vec<Vec<u32>>,
+    /// Vertex → non-edge τ partners.
+    partners: Vec<Vec<u32>>,
+    version: Vec<u32>,
+    alive: Vec<bool>,
+    locked: Vec<bool>,
+    boundary: Vec<bool>,
+    heap: BinaryHeap<Entry>,
+    live_tris: usize,
+    log: Vec<Contraction>,
+    stats: Stats,
+    /// Scratch: per-vertex marks with a generation counter.
+    mark: Vec<u32>,
+    generation: u32,
+    scratch: Vec<u32>,
+}
+
+#[inline]
+fn dv(p: [f32; 3]) -> DVec3 {
+    DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+}
+
+#[inline]
+fn fv(p: DVec3) -> [f32; 3] {
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+impl Simplifier {
+    /// Set up quadrics, classification, pairs and the heap. The mesh must be
+    /// clean (see [`crate::mesh::prepare`]): no repeated corner in a triangle.
+    pub fn new(mesh: &Mesh, opts: &SimplifyOptions) -> Result<Simplifier, MeshError> {
+        mesh.validate()?;
+        if mesh.triangles.is_empty() {
+            return Err(MeshError::Empty(""));
+        }
+        let t0 = Instant::now();
+        let nv = mesh.positions.len();
+        let nt = mesh.triangles.len();
+        let mut stats = Stats {
+            input_vertices: nv,
+            input_triangles: nt,
+            ..Stats::default()
+        };
+        // Vertex → triangles, filled from counts so each Vec is allocated once.
+        let mut degree = vec![0u32; nv];
+        for t in &mesh.triangles {
+            for &v in t {
+                degree[v as usize] += 1;
+            }
+        }
+        let mut vtris: Vec<Vec<u32>> = degree
+            .iter()
+            .map(|&d| Vec::with_capacity(d as usize))
+            .collect();
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            for &v in t {
+                vtris[v as usize].push(i as u32);
+            }
+        }
+
+        // Directed edges sorted by undirected key: classify each edge.
+        let mut half: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * nt);
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                half.push((a.min(b), a.max(b), (i as u32) << 1 | u32::from(a > b)));
+            }
+        }
+        half.par_sort_unstable();
+        let mut locked = vec![false; nv];
+        let mut boundary = vec![false; nv];
+        let mut quadric = vec![Quadric::default(); nv];
+        let mut edges = Vec::with_capacity(half.len() / 2 + 1);
+        let boundary_weight = match opts.boundary {
+            Boundary::Weighted(w) => w,
+            Boundary::Locked => 0.0,
+        };
+        for run in half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            let (a, b) = (run[0].0, run[0].1);
+            edges.push((a, b));
+            match run.len() {
+                1 => {
+                    boundary[a as usize] = true;
+                    boundary[b as usize] = true;
+                    if boundary_weight > 0.0 {
+                        let t = mesh.triangles[(run[0].2 >> 1) as usize];
+                        let (pa, pb) = (
+                            dv(mesh.positions[a as usize]),
+                            dv(mesh.positions[b as usize]),
+                        );
+                        let n = face_normal(&mesh.positions, &t);
+                        let e = pb - pa;
+                        let c = e.cross(n);
+                        let len = c.length();
+                        if len > 0.0 {
+                            let c = c / len;
+                            let w = boundary_weight
+                                * if opts.area_weighted {
+                                    e.length_squared()
+                                } else {
+                                    1.0
+                                };
+                            let q = Quadric::from_plane(c, -c.dot(pa), w);
+                            // constraint planes shape the cost, not the
+                            // mean-distance normalisation
+                            let q = Quadric { weight: 0.0, ..q };
+                            quadric[a as usize] += q;
+                            quadric[b as usize] += q;
+                        }
+                    }
+                }
+                // an interior edge must be used once in each direction
+                2 if (run[0].2 & 1) != (run[1].2 & 1) => {}
+                _ => {
+                    locked[a as usize] = true;
+                    locked[b as usize] = true;
+                }
+            }
+        }
+        drop(half);
+
+        // Face quadrics.
+        for t in &mesh.triangles {
+            let [p0, p1, p2] = t.map(|v| dv(mesh.positions[v as usize]));
+            let n = (p1 - p0).cross(p2 - p0);
+            let len = n.length();
+            if len > 0.0 {
+                let unit = n / len;
+                let w = if opts.area_weighted { 0.5 * len } else { 1.0 };
+                let q = Quadric::from_plane(unit, -unit.dot(p0), w);
+                for &v in t {
+                    quadric[v as usize] += q;
+                }
+            }
+        }
+
+        let mut s = Simplifier {
+            opts: *opts,
+            target: opts.target_for(nt),
+            pos: mesh.positions.clone(),
+            quadric,
+            tris: mesh.triangles.clone(),
+            tri_alive: vec![true; nt],
+            vtris,
+            partners: vec![Vec::new(); nv],
+            version: vec![0; nv],
+            alive: vec![true; nv],
+            locked,
+            boundary,
+            heap: BinaryHeap::new(),
+            live_tris: nt,
+            log: Vec::with_capacity(nt / 2),
+            stats,
+            mark: vec![0; nv],
+            generation: 0,
+            scratch: Vec::new(),
+        };
+        // Non-manifold vertices (several fans meeting at one vertex).
+        for v in 0..nv as u32 {
+            if !s.locked[v as usize] && s.fan_count(v) > 1 {
+                s.locked[v as usize] = true;
+            }
+        }
+        if opts.boundary == Boundary::Locked {
+            for v in 0..nv {
+                s.locked[v] |= s.boundary[v];
+            }
+        }
+        stats = s.stats;
+        stats.boundary_vertices = s.boundary.iter().filter(|&&b| b).count();
+        stats.locked_vertices = s.locked.iter().filter(|&&b| b).count();
+        stats.time.setup = t0.elapsed();
+
+        let t1 = Instant::now();
+        let tau = opts.tau_for(mesh.diagonal());
+        let near = pairs::near_pairs(&mesh.positions, &edges, tau);
+        stats.near_pairs = near.len();
+        for &(a, b) in &near {
+            s.partners[a as usize].push(b);
+            s.partners[b as usize].push(a);
+        }
+        stats.time.pairs = t1.elapsed();
+
+        let t2 = Instant::now();
+        edges.extend_from_slice(&near);
+        let entries: Vec<Entry> = edges
+            .par_iter()
+            .filter(|&&(a, b)| !(s.locked[a as usize] && s.locked[b as usize]))
+            .map(|&(a, b)| s.entry(a, b))
+            .collect();
+        s.heap = BinaryHeap::from(entries);
+        stats.time.heap = t2.elapsed();
+        s.stats = stats;
+        Ok(s)
+    }
+
+    /// Number of edge-connected fans of triangles around `v` (1 for a
+    /// manifold vertex).
+    fn fan_count(&mut self, v: u32) -> usize {
+        // Union-find over the triangles of v, joined across shared edges
+        // (v, x): small, so a quadratic scan is cheapest.
+        let ts = &self.vtris[v as usize];
+        let n = ts.len();
+        if n <= 1 {
+            return n;
+        }
+        let mut comp: SmallVec<[u32; 16]> = (0..n as u32).collect();
+        let others = |t: u32| -> [u32; 2] {
+            let tri = self.tris[t as usize];
+            let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+            [tri[(k + 1) % 3], tri[(k + 2) % 3]]
+        };
+        let mut changed = true;
+        while changed {
+            changed = false;
+            for i in 0..n {
+                let oi = others(ts[i]);
+                for j in i + 1..n {
+                    let oj = others(ts[j]);
+                    if oi.iter().any(|x| oj.contains(x)) && comp[i] != comp[j] {
+                        let m = comp[i].min(comp[j]);
+                        comp[i] = m;
+                        comp[j] = m;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        comp.sort_unstable();
+        comp.dedup();
+        comp.len()
+    }
+
+    /// The contraction target and cost of the pair `(a, b)`.
+    fn target_of(&self, a: u32, b: u32) -> (DVec3, f64) {
+        let q = self.quadric[a as usize] + self.quadric[b as usize];
+        let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
+        match (self.locked[a as usize], self.locked[b as usize]) {
+            (true, _) => (pa, q.eval(pa)),
+            (false, true) => (pb, q.eval(pb)),
+            // Border vertices never move to a new position: an interior
+            // vertex is pulled onto a border one, and two border vertices
+            // merge into the cheaper of the two (half-edge). With optimal
+            // placement a corner slides a little along one border line, and
+            // the next collapse along the other line cuts it off: borders
+            // creep. The constraint planes still price which one goes.
+            (false, false) if self.boundary[a as usize] && !self.boundary[b as usize] => {
+                (pa, q.eval(pa))
+            }
+            (false, false) if self.boundary[b as usize] && !self.boundary[a as usize] => {
+                (pb, q.eval(pb))
+            }
+            (false, false) => match self.opts.placement {
+                Placement::Optimal if !self.boundary[a as usize] => q.placement(pa, pb),
+                _ => {
+                    let (ca, cb) = (q.eval(pa), q.eval(pb));
+                    if cb < ca {
+                        (pb, cb)
+                    } else {
+                        (pa, ca)
+                    }
+                }
+            },
+        }
+    }
+
+    fn entry(&self, a: u32, b: u32) -> Entry {
+        let (a, b) = (a.min(b), a.max(b));
+        let (_, cost) = self.target_of(a, b);
+        Entry {
+            cost,
+            a,
+            b,
+            va: self.version[a as usize],
+            vb: self.version[b as usize],
+        }
+    }
+
+    /// Live triangles now.
+    pub fn triangle_count(&self) -> usize {
+        self.live_tris
+    }
+
+    /// The triangle count `run` stops at.
+    pub fn target(&self) -> usize {
+        self.target
+    }
+
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// Perform the cheapest legal contraction. `Err` says why none was done.
+    pub fn step(&mut self) -> Result<(), StopReason> {
+        let t0 = Instant::now();
+        let r = self.step_inner();
+        self.stats.time.collapse += t0.elapsed();
+        r
+    }
+
+    fn step_inner(&mut self) -> Result<(), StopReason> {
+        if self.live_tris <= self.target {
+            return Err(StopReason::Target);
+        }
+        while let Some(e) = self.heap.pop() {
+            let (a, b) = (e.a as usize, e.b as usize);
+            if !self.alive[a]
+                || !self.alive[b]
+                || self.version[a] != e.va
+                || self.version[b] != e.vb
+            {
+                continue;
+            }
+            let (p, cost) = self.target_of(e.a, e.b);
+            let q = self.quadric[a] + self.quadric[b];
+            let error = if q.weight > 0.0 {
+                (cost / q.weight).sqrt()
+            } else {
+                cost.sqrt()
+            };
+            if self.opts.max_error.is_some_and(|m| error > m) {
+                self.stats.rejected.count(Rejected::Error);
+                continue;
+            }
+            // v1 (kept) is the endpoint the new vertex is closer to.
+            let (v0, v1) = if self.locked[a]
+                || (!self.locked[b]
+                    && (p - dv(self.pos[a])).length_squared()
+                        <= (p - dv(self.pos[b])).length_squared())
+            {
+                (e.b, e.a)
+            } else {
+                (e.a, e.b)
+            };
+            match self.check(v0, v1, p) {
+                Ok(shared) => {
+                    self.contract(v0, v1, p, error as f32, shared);
+                    return Ok(());
+                }
+                Err(r) => self.stats.rejected.count(r),
+            }
+        }
+        Err(if self.stats.rejected.error > 0 {
+            StopReason::MaxError
+        } else {
+            StopReason::Exhausted
+        })
+    }
+
+    /// Run until a stop; returns the reason.
+    pub fn run(&mut self) -> StopReason {
+        loop {
+            if let Err(r) = self.step() {
+                return r;
+            }
+        }
+    }
+
+    fn next_generation(&mut self) -> u32 {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.mark.fill(0);
+            self.generation = 1;
+        }
+        self.generation
+    }
+
+    /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
+    /// On success returns the triangles the contraction deletes.
+    fn check(&mut self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
+        let (i0, i1) = (v0 as usize, v1 as usize);
+        if self.locked[i0] && self.locked[i1] {
+            return Err(Rejected::Locked);
+        }
+        // Triangles on both vertices (deleted) and the one-ring of v0.
+        let g = self.next_generation();
+        let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
+        let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
+        for &t in &self.vtris[i0] {
+            if !self.tri_alive[t as usize] {
+                continue;
+            }
+            let tri = self.tris[t as usize];
+            if tri.contains(&v1) {
+                shared.push(t);
+                if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
+                    opposite.push(o);
+                }
+            }
+            for &x in &tri {
+                if x != v0 {
+                    self.mark[x as usize] = g;
+                }
+            }
+        }
+        if shared.len() == 2 && self.boundary[i0] && self.boundary[i1] {
+            return Err(Rejected::BoundaryPinch);
+        }
+        if shared.len() > 2 {
+            return Err(Rejected::Link);
+        }
+        // Link condition: the only common neighbours are the opposite ones.
+        let g2 = self.next_generation();
+        debug_assert_ne!(g, g2);
+        let mut common = 0;
+        for &t in &self.vtris[i1] {
+            if !self.tri_alive[t as usize] {
+                continue;
+            }
+            for &x in &self.tris[t as usize] {
+                if x != v1 && x != v0 && self.mark[x as usize] == g {
+                    self.mark[x as usize] = g2; // count each once
+                    common += 1;
+                }
+            }
+        }
+        if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
+            return Err(Rejected::Link);
+        }
+        // Flip and degeneracy of every triangle that moves.
+        for (moving, other) in [(v0, v1), (v1, v0)] {
+            for &t in &self.vtris[moving as usize] {
+                if !self.tri_alive[t as usize] {
+                    continue;
+                }
+                let tri = self.tris[t as usize];
+                if tri.contains(&other) {
+                    continue;
+                }
+                let old = tri.map(|v| dv(self.pos[v as usize]));
+                let new = tri.map(|v| {
+                    if v == moving {
+                        p
+                    } else {
+                        dv(self.pos[v as usize])
+                    }
+                });
+                let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+                let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+                let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
+                if l_old > 0.0 {
+                    if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
+                        return Err(Rejected::Degenerate);
+                    }
+                    if n_old.dot(n_new) < FLIP_MIN_COS * (l_old * l_new).sqrt() {
+                        return Err(Rejected::Flip);
+                    }
+                }
+            }
+        }
+        // A moved triangle must not land on an existing one.
+        for &t in &self.vtris[i0] {
+            if !self.tri_alive[t as usize] || shared.contains(&t) {
+                continue;
+            }
+            let tri = self.tris[t as usize];
+            let xy: SmallVec<[u32; 2]> = tri.iter().copied().filter(|&x| x != v0).collect();
+            for &u in &self.vtris[i1] {
+                if self.tri_alive[u as usize] && !shared.contains(&u) {
+                    let o = self.tris[u as usize];
+                    if o.contains(&xy[0]) && o.contains(&xy[1]) {
+                        return Err(Rejected::Duplicate);
+                    }
+                }
+            }
+        }
+        Ok(shared)
+    }
+
+    /// Contract `v0` into `v1` at `p`, record it, and re-queue `v1`'s pairs.
+    fn contract(&mut self, v0: u32, v1: u32, p: DVec3, error: f32, removed: SmallVec<[u32; 2]>) {
+        let (i0, i1) = (v0 as usize, v1 as usize);
+        let merged = fv(p);
+        let mut record = Contraction {
+            v0,
+            v1,
+            p0: self.pos[i0],
+            p1: self.pos[i1],
+            merged,
+            removed,
+            moved: Vec::new(),
+            error,
+        };
+        for &t in &record.removed {
+            self.tri_alive[t as usize] = false;
+        }
+        self.live_tris -= record.removed.len();
+        let from = std::mem::take(&mut self.vtris[i0]);
+        let mut into = std::mem::take(&mut self.vtris[i1]);
+        into.retain(|&t| self.tri_alive[t as usize]);
+        for &t in &from {
+            if !self.tri_alive[t as usize] {
+                continue;
+            }
+            let tri = &mut self.tris[t as usize];
+            if let Some(k) = tri.iter().position(|&x| x == v0) {
+                tri[k] = v1;
+                record.moved.push(Corner {
+                    triangle: t,
+                    slot: k as u8,
+                });
+                into.push(t);
+            }
+        }
+        self.vtris[i1] = into;
+        self.pos[i1] = merged;
+        let q0 = self.quadric[i0];
+        self.quadric[i1] += q0;
+        self.alive[i0] = false;
+        self.version[i1] = self.version[i1].wrapping_add(1);
+        self.boundary[i1] |= self.boundary[i0];
+        if !self.partners[i0].is_empty() || !self.partners[i1].is_empty() {
+            let mut p = std::mem::take(&mut self.partners[i0]);
+            p.append(&mut self.partners[i1]);
+            p.retain(|&x| x != v1 && x != v0 && self.alive[x as usize]);
+            p.sort_unstable();
+            p.dedup();
+            self.partners[i1] = p;
+        }
+        self.log.push(record);
+        self.stats.collapses += 1;
+
+        // Re-queue every pair of v1: its edge neighbours and τ partners.
+        let g = self.next_generation();
+        let mut ns = std::mem::take(&mut self.scratch);
+        ns.clear();
+        for &t in &self.vtris[i1] {
+            for &x in &self.tris[t as usize] {
+                if x != v1 && self.mark[x as usize] != g {
+                    self.mark[x as usize] = g;
+                    ns.push(x);
+                }
+            }
+        }
+        for &x in &self.partners[i1] {
+            if self.mark[x as usize] != g {
+                self.mark[x as usize] = g;
+                ns.push(x);
+            }
+        }
+        for &x in &ns {
+            if !(self.locked[i1] && self.locked[x as usize]) {
+                let e = self.entry(v1, x);
+                self.heap.push(e);
+            }
+        }
+        self.scratch = ns;
+    }
+
+    /// The current mesh in the input's numbering.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            positions: self.pos.clone(),
+            triangles: (0..self.tris.len())
+                .filter(|&t| self.tri_alive[t])
+                .map(|t| (t as u32, self.tris[t]))
+                .collect(),
+        }
+    }
+
+    /// Turn the log into the progressive mesh.
+    pub fn finish(mut self) -> (ProgressiveMesh, Stats) {
+        let t0 = Instant::now();
+        let pm = ProgressiveMesh::from_log(
+            &self.pos,
+            &self.tris,
+            &self.alive,
+            &self.tri_alive,
+            &self.log,
+        );
+        self.stats.output_triangles = self.live_tris;
+        self.stats.output_vertices = pm.base.positions.len();
+        self.stats.time.log = t0.elapsed();
+        (pm, self.stats)
+    }
+}
+
+fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
+    let [p0, p1, p2] = t.map(|v| dv(positions[v as usize]));
+    (p1 - p0).cross(p2 - p0).normalize_or_zero()
+}

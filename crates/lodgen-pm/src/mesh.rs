@@ -1,0 +1,295 @@
+//! The indexed triangle mesh the core works on, and its preparation from
+//! user input: validation (typed errors naming the triangle or vertex),
+//! welding of vertices with identical positions, and removal of unused
+//! vertices, degenerate and duplicate triangles.
+//!
+//! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
+
+use thiserror::Error;
+
+/// An indexed triangle mesh: `f32` positions, `u32` corner indices.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Why user input was refused.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum MeshError {
+    #[error("the index count {0} is not a multiple of 3")]
+    IndexCount(usize),
+    #[error(
+        "triangle {triangle} refers to vertex {index}, but there are only {vertex_count} vertices"
+    )]
+    IndexOutOfRange {
+        triangle: usize,
+        index: u32,
+        vertex_count: usize,
+    },
+    #[error("vertex {vertex} has a non-finite coordinate {value:?}")]
+    NonFinite { vertex: usize, value: [f32; 3] },
+    #[error("the mesh has no triangles{0}")]
+    Empty(&'static str),
+    #[error("the mesh has {0} vertices; at most 2^32 - 1 are supported")]
+    TooLarge(usize),
+}
+
+/// The result of [`prepare`]: the welded mesh the simplifier runs on and the
+/// maps back to the input.
+#[derive(Clone, Debug, Default)]
+pub struct Prepared {
+    pub mesh: Mesh,
+    /// Input vertex → welded vertex (`u32::MAX` for vertices no kept
+    /// triangle uses).
+    pub vertex_map: Vec<u32>,
+    /// Welded triangle → input triangle.
+    pub triangle_map: Vec<u32>,
+    pub stats: PrepareStats,
+}
+
+/// What [`prepare`] removed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PrepareStats {
+    pub input_vertices: usize,
+    pub input_triangles: usize,
+    /// Vertices merged into another with the identical position.
+    pub welded_vertices: usize,
+    /// Vertices no triangle refers to.
+    pub unused_vertices: usize,
+    /// Triangles with a repeated corner (after welding).
+    pub degenerate_triangles: usize,
+    /// Triangles on the same three vertices as an earlier one (either
+    /// orientation).
+    pub duplicate_triangles: usize,
+}
+
+impl Mesh {
+    /// Build a mesh from flat indices, validating but not welding.
+    pub fn from_indices(positions: Vec<[f32; 3]>, indices: &[u32]) -> Result<Mesh, MeshError> {
+        if indices.len() % 3 != 0 {
+            return Err(MeshError::IndexCount(indices.len()));
+        }
+        let triangles = indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let mesh = Mesh {
+            positions,
+            triangles,
+        };
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// Check indices and coordinates.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if self.positions.len() >= u32::MAX as usize {
+            return Err(MeshError::TooLarge(self.positions.len()));
+        }
+        for (vertex, p) in self.positions.iter().enumerate() {
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(MeshError::NonFinite { vertex, value: *p });
+            }
+        }
+        let n = self.positions.len();
+        for (triangle, t) in self.triangles.iter().enumerate() {
+            for &index in t {
+                if index as usize >= n {
+                    return Err(MeshError::IndexOutOfRange {
+                        triangle,
+                        index,
+                        vertex_count: n,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Axis-aligned bounds `(min, max)`; `None` when there are no vertices.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let first = *self.positions.first()?;
+        Some(self.positions.iter().fold((first, first), |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
+                [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
+            )
+        }))
+    }
+
+    /// Length of the bounding-box diagonal (0 for an empty mesh).
+    pub fn diagonal(&self) -> f64 {
+        self.bounds().map_or(0.0, |(lo, hi)| {
+            let d = [0, 1, 2].map(|i| f64::from(hi[i]) - f64::from(lo[i]));
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        })
+    }
+
+    /// Flat index list.
+    pub fn indices(&self) -> Vec<u32> {
+        self.triangles.iter().flatten().copied().collect()
+    }
+}
+
+/// The key positions are welded by: bit patterns, with -0.0 folded into 0.0.
+fn weld_key(p: &[f32; 3]) -> [u32; 3] {
+    p.map(|c| if c == 0.0 { 0 } else { c.to_bits() })
+}
+
+/// Validate `positions` + triangle `indices`, weld identical positions, drop
+/// unused vertices and degenerate / duplicate triangles.
+///
+/// Welded vertices are numbered in order of first use by the triangles, and
+/// kept triangles keep their input order and corner order, so the result is a
+/// pure function of the input.
+pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, MeshError> {
+    if indices.len() % 3 != 0 {
+        return Err(MeshError::IndexCount(indices.len()));
+    }
+    let input = Mesh {
+        positions: positions.to_vec(),
+        triangles: indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+    };
+    input.validate()?;
+    if input.triangles.is_empty() {
+        return Err(MeshError::Empty(""));
+    }
+    let mut stats = PrepareStats {
+        input_vertices: positions.len(),
+        input_triangles: input.triangles.len(),
+        ..PrepareStats::default()
+    };
+
+    // Canonical representative of each position: the lowest input index.
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    order.sort_unstable_by_key(|&i| (weld_key(&positions[i as usize]), i));
+    let mut canonical: Vec<u32> = (0..positions.len() as u32).collect();
+    for run in order
+        .chunk_by(|&a, &b| weld_key(&positions[a as usize]) == weld_key(&positions[b as usize]))
+    {
+        for &i in run {
+            canonical[i as usize] = run[0];
+        }
+    }
+
+    // Number welded vertices by first use; drop bad triangles.
+    let mut vertex_map = vec![u32::MAX; positions.len()];
+    let mut welded_positions = Vec::new();
+    let mut triangles = Vec::with_capacity(input.triangles.len());
+    let mut triangle_map = Vec::with_capacity(input.triangles.len());
+    let mut keys: Vec<([u32; 3], u32)> = Vec::with_capacity(input.triangles.len());
+    for (ti, t) in input.triangles.iter().enumerate() {
+        let c = t.map(|i| canonical[i as usize]);
+        if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+            stats.degenerate_triangles += 1;
+            continue;
+        }
+        let mut key = c;
+        key.sort_unstable();
+        keys.push((key, ti as u32));
+    }
+    // Duplicates: keep the first triangle on each vertex set.
+    keys.sort_unstable();
+    let mut keep = vec![false; input.triangles.len()];
+    for run in keys.chunk_by(|a, b| a.0 == b.0) {
+        keep[run[0].1 as usize] = true;
+        stats.duplicate_triangles += run.len() - 1;
+    }
+    for (ti, t) in input.triangles.iter().enumerate() {
+        if !keep[ti] {
+            continue;
+        }
+        let tri = t.map(|i| {
+            let c = canonical[i as usize] as usize;
+            if vertex_map[c] == u32::MAX {
+                vertex_map[c] = welded_positions.len() as u32;
+                welded_positions.push(positions[c]);
+            }
+            vertex_map[c]
+        });
+        triangles.push(tri);
+        triangle_map.push(ti as u32);
+    }
+    for i in 0..positions.len() {
+        let c = canonical[i] as usize;
+        vertex_map[i] = vertex_map[c];
+        if c != i && vertex_map[c] != u32::MAX {
+            stats.welded_vertices += 1;
+        }
+    }
+    stats.unused_vertices = positions.len() - stats.welded_vertices - welded_positions.len();
+    if triangles.is_empty() {
+        return Err(MeshError::Empty(
+            " left after dropping degenerate triangles",
+        ));
+    }
+    Ok(Prepared {
+        mesh: Mesh {
+            positions: welded_positions,
+            triangles,
+        },
+        vertex_map,
+        triangle_map,
+        stats,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welds_split_vertices_and_drops_bad_triangles() {
+        // two triangles of a quad with the shared edge's vertices duplicated,
+        // one degenerate triangle, one duplicate (reversed), one unused vertex
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [9.0, 9.0, 9.0],
+            [-0.0, 0.0, 0.0],
+        ];
+        let idx = [0, 1, 2, 3, 4, 5, 0, 3, 1, 2, 1, 0, 7, 4, 5];
+        let r = prepare(&p, &idx).unwrap();
+        assert_eq!(r.mesh.positions.len(), 4);
+        assert_eq!(r.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(r.triangle_map, vec![0, 1]);
+        assert_eq!(r.stats.degenerate_triangles, 1);
+        assert_eq!(r.stats.duplicate_triangles, 2);
+        assert_eq!(r.stats.unused_vertices, 1);
+        assert_eq!(r.stats.welded_vertices, 3);
+        assert_eq!(r.vertex_map[6], u32::MAX);
+        assert_eq!(r.vertex_map[7], 0);
+    }
+
+    #[test]
+    fn bad_input_is_a_typed_error() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(matches!(
+            prepare(&p, &[0, 1, 2, 0, 1, 3]),
+            Err(MeshError::IndexOutOfRange {
+                triangle: 1,
+                index: 3,
+                vertex_count: 3
+            })
+        ));
+        let nan = [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(matches!(
+            prepare(&nan, &[0, 1, 2]),
+            Err(MeshError::NonFinite { vertex: 1, .. })
+        ));
+        assert!(matches!(
+            prepare(&p, &[0, 1]),
+            Err(MeshError::IndexCount(2))
+        ));
+        assert!(matches!(prepare(&p, &[]), Err(MeshError::Empty(_))));
+        assert!(matches!(prepare(&p, &[0, 0, 1]), Err(MeshError::Empty(_))));
+    }
+}

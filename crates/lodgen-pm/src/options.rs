@@ -1,0 +1,128 @@
+//! [`SimplifyOptions`]: what to simplify to and how. Units are stated on each
+//! field; `SimplifyOptions::DEFAULT` documents every default.
+
+/// Default weight of the boundary constraint planes, relative to the face
+/// planes (GH97 §6.1 suggests a large penalty; 1 lets borders slide along
+/// themselves but barely away from them once scaled by edge length²).
+pub const DEFAULT_BOUNDARY_WEIGHT: f64 = 10.0;
+
+/// How open boundaries are treated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Boundary {
+    /// Add a constraint plane through each boundary edge, perpendicular to
+    /// its face, with this weight (× edge length² when area-weighted).
+    Weighted(f64),
+    /// Boundary vertices never move; interior vertices may still collapse
+    /// onto them.
+    Locked,
+}
+
+/// Where a contracted pair's new vertex goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// The quadric-optimal point (3×3 solve, segment fallback).
+    Optimal,
+    /// The better of the two endpoints (half-edge collapse): every level's
+    /// positions are a subset of the input's.
+    HalfEdge,
+}
+
+/// The pair-distance threshold τ of GH97 (non-edge pairs closer than τ may
+/// contract too).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tau {
+    /// In the mesh's units.
+    Absolute(f64),
+    /// As a fraction (0.005 = 0.5 %) of the bounding-box diagonal.
+    DiagonalFraction(f64),
+}
+
+/// Options of [`crate::simplify`]. Stopping: whichever target is reached
+/// first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct SimplifyOptions {
+    /// Stop at or below this many triangles. Default value: none.
+    pub target_triangles: Option<usize>,
+    /// Stop at or below this fraction of the (welded) input's triangles.
+    /// Default value: none. Neither target set means "as far as possible".
+    pub target_ratio: Option<f64>,
+    /// Stop before a contraction whose quadric error (root mean squared
+    /// distance to its planes, mesh units) exceeds this. Default value: none.
+    pub max_error: Option<f64>,
+    /// Non-edge pair threshold. Default value: `Absolute(0.0)` (edges only).
+    pub tau: Tau,
+    /// Weight face planes by triangle area (GH97 §6.3) instead of 1 each.
+    /// Default value: `true`.
+    pub area_weighted: bool,
+    /// Default value: `Weighted(DEFAULT_BOUNDARY_WEIGHT)`.
+    pub boundary: Boundary,
+    /// Default value: `Optimal`.
+    pub placement: Placement,
+}
+
+impl SimplifyOptions {
+    pub const DEFAULT: SimplifyOptions = SimplifyOptions {
+        target_triangles: None,
+        target_ratio: None,
+        max_error: None,
+        tau: Tau::Absolute(0.0),
+        area_weighted: true,
+        boundary: Boundary::Weighted(DEFAULT_BOUNDARY_WEIGHT),
+        placement: Placement::Optimal,
+    };
+    pub fn with_target_triangles(mut self, n: usize) -> Self {
+        self.target_triangles = Some(n);
+        self
+    }
+    pub fn with_target_ratio(mut self, r: f64) -> Self {
+        self.target_ratio = Some(r);
+        self
+    }
+    pub fn with_max_error(mut self, e: f64) -> Self {
+        self.max_error = Some(e);
+        self
+    }
+    pub fn with_tau(mut self, t: Tau) -> Self {
+        self.tau = t;
+        self
+    }
+    pub fn with_area_weighted(mut self, on: bool) -> Self {
+        self.area_weighted = on;
+        self
+    }
+    pub fn with_boundary(mut self, b: Boundary) -> Self {
+        self.boundary = b;
+        self
+    }
+    pub fn with_placement(mut self, p: Placement) -> Self {
+        self.placement = p;
+        self
+    }
+
+    /// The triangle count to stop at for an input of `n` triangles.
+    pub fn target_for(&self, n: usize) -> usize {
+        let by_ratio = self
+            .target_ratio
+            .map(|r| (r.clamp(0.0, 1.0) * n as f64).floor() as usize);
+        match (self.target_triangles, by_ratio) {
+            (Some(a), Some(b)) => a.max(b),
+            (Some(a), None) | (None, Some(a)) => a,
+            (None, None) => 0,
+        }
+    }
+
+    /// τ in mesh units for a mesh of bounding-box diagonal `diagonal`.
+    pub fn tau_for(&self, diagonal: f64) -> f64 {
+        match self.tau {
+            Tau::Absolute(t) => t,
+            Tau::DiagonalFraction(f) => f * diagonal,
+        }
+    }
+}
+
+impl Default for SimplifyOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

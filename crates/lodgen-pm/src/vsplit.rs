@@ -1,0 +1,313 @@
+//! The vertex-split log (Hoppe 1996, "Progressive Meshes"; OpenMesh's
+//! collapse-diamond names: `v0` removed by the collapse, `v1` kept) and the
+//! [`ProgressiveMesh`] that replays it.
+//!
+//! Numbering: vertices and triangles are numbered in the order they *appear*
+//! during refinement. The base mesh M_g holds vertices `0..nb` and triangles
+//! `0..tb`; split `i` (coarse → fine) appends vertex `nb + i` and the
+//! triangles it restores. So every level is a prefix of one vertex list and
+//! one triangle list, plus corner edits: extraction, streaming and the glTF
+//! writer all rely on this.
+//!
+//! Owns [`VertexSplit`], [`ProgressiveMesh`], [`Cursor`] and the conversion
+//! from the simplifier's contraction log. No simplification logic here.
+
+use crate::mesh::Mesh;
+use smallvec::SmallVec;
+
+/// A triangle corner: `triangles[triangle][slot]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Corner {
+    pub triangle: u32,
+    pub slot: u8,
+}
+
+/// One vertex split: the exact inverse of one contraction.
+///
+/// Applying it to the mesh with `v0` vertices and `t` triangles:
+/// 1. set `v1`'s position to `p1` and append vertex `v0` at `p0`;
+/// 2. append `faces` as triangles `t, t + 1, …`;
+/// 3. set every corner in `corners` (currently `v1`) to `v0`.
+///
+/// Undoing it (a collapse) reverses the three steps, putting `v1` at
+/// `p_merged`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexSplit {
+    /// The vertex that stays (it exists before the split).
+    pub v1: u32,
+    /// The vertex the split restores: always the next vertex index.
+    pub v0: u32,
+    /// `v1`'s position after the split (before the contraction).
+    pub p1: [f32; 3],
+    /// `v1`'s position before the split: the contraction's result.
+    pub p_merged: [f32; 3],
+    /// `v0`'s position.
+    pub p0: [f32; 3],
+    /// The triangles the contraction deleted, restored by the split in this
+    /// order: two for an interior edge (`fl`, `fr`), one on a border, none
+    /// for a non-edge (τ) pair.
+    pub faces: SmallVec<[[u32; 3]; 2]>,
+    /// The corners that go from `v1` back to `v0`, sorted.
+    pub corners: Vec<Corner>,
+    /// The contraction's quadric error: root mean squared distance from the
+    /// new vertex to the planes it carries (mesh units).
+    pub error: f32,
+}
+
+/// The whole sequence M_n … M_g: the base mesh plus the splits that refine it
+/// back to the (welded) input.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ProgressiveMesh {
+    /// M_g, the coarsest mesh.
+    pub base: Mesh,
+    /// Coarse → fine.
+    pub splits: Vec<VertexSplit>,
+    /// Progressive vertex index → vertex of the welded input.
+    pub vertex_origin: Vec<u32>,
+    /// Progressive triangle index → triangle of the welded input.
+    pub triangle_origin: Vec<u32>,
+}
+
+/// A contraction as the simplifier records it, in the welded input's
+/// numbering (see `collapse`).
+#[derive(Clone, Debug)]
+pub(crate) struct Contraction {
+    pub v0: u32,
+    pub v1: u32,
+    pub p0: [f32; 3],
+    pub p1: [f32; 3],
+    pub merged: [f32; 3],
+    pub removed: SmallVec<[u32; 2]>,
+    pub moved: Vec<Corner>,
+    pub error: f32,
+}
+
+impl ProgressiveMesh {
+    /// Build from the simplifier's final state and log (collapse order).
+    pub(crate) fn from_log(
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        vertex_alive: &[bool],
+        triangle_alive: &[bool],
+        log: &[Contraction],
+    ) -> ProgressiveMesh {
+        const NONE: u32 = u32::MAX;
+        let mut vnew = vec![NONE; positions.len()];
+        let mut tnew = vec![NONE; triangles.len()];
+        let mut vertex_origin = Vec::with_capacity(positions.len());
+        let mut triangle_origin = Vec::with_capacity(triangles.len());
+        for (v, &alive) in vertex_alive.iter().enumerate() {
+            if alive {
+                vnew[v] = vertex_origin.len() as u32;
+                vertex_origin.push(v as u32);
+            }
+        }
+        for (t, &alive) in triangle_alive.iter().enumerate() {
+            if alive {
+                tnew[t] = triangle_origin.len() as u32;
+                triangle_origin.push(t as u32);
+            }
+        }
+        let base_vertices = vertex_origin.len();
+        let base_triangles = triangle_origin.len();
+        for c in log.iter().rev() {
+            vnew[c.v0 as usize] = vertex_origin.len() as u32;
+            vertex_origin.push(c.v0);
+            for &t in &c.removed {
+                tnew[t as usize] = triangle_origin.len() as u32;
+                triangle_origin.push(t);
+            }
+        }
+        debug_assert!(vnew.iter().all(|&v| v != NONE));
+        let map = |t: &[u32; 3]| t.map(|v| vnew[v as usize]);
+        // The final state's corners, and the corners as they were when each
+        // removed triangle died, are both in `triangles` (dead triangles are
+        // never edited again).
+        let base = Mesh {
+            positions: vertex_origin[..base_vertices]
+                .iter()
+                .map(|&v| positions[v as usize])
+                .collect(),
+            triangles: triangle_origin[..base_triangles]
+                .iter()
+                .map(|&t| map(&triangles[t as usize]))
+                .collect(),
+        };
+        let splits = log
+            .iter()
+            .rev()
+            .map(|c| {
+                let mut corners: Vec<Corner> = c
+                    .moved
+                    .iter()
+                    .map(|k| Corner {
+                        triangle: tnew[k.triangle as usize],
+                        slot: k.slot,
+                    })
+                    .collect();
+                corners.sort_unstable();
+                VertexSplit {
+                    v1: vnew[c.v1 as usize],
+                    v0: vnew[c.v0 as usize],
+                    p1: c.p1,
+                    p_merged: c.merged,
+                    p0: c.p0,
+                    faces: c
+                        .removed
+                        .iter()
+                        .map(|&t| map(&triangles[t as usize]))
+                        .collect(),
+                    corners,
+                    error: c.error,
+                }
+            })
+            .collect();
+        ProgressiveMesh {
+            base,
+            splits,
+            vertex_origin,
+            triangle_origin,
+        }
+    }
+
+    /// Number of splits: the finest level is `mesh_at_splits(len())`.
+    pub fn len(&self) -> usize {
+        self.splits.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.splits.is_empty()
+    }
+
+    /// Triangle count after `k` splits, for every `k` in `0..=len()`
+    /// (non-decreasing).
+    pub fn triangle_counts(&self) -> Vec<usize> {
+        let mut out = Vec::with_capacity(self.splits.len() + 1);
+        let mut n = self.base.triangles.len();
+        out.push(n);
+        for s in &self.splits {
+            n += s.faces.len();
+            out.push(n);
+        }
+        out
+    }
+
+    /// The largest split count whose mesh has at most `triangles` triangles
+    /// (0 when even the base mesh has more).
+    pub fn splits_for_triangles(&self, triangles: usize) -> usize {
+        let counts = self.triangle_counts();
+        counts
+            .partition_point(|&c| c <= triangles)
+            .saturating_sub(1)
+    }
+
+    /// The mesh after `k` splits (clamped to `len()`): exactly the mesh the
+    /// simplifier had `len() - k` contractions into its run.
+    pub fn mesh_at_splits(&self, k: usize) -> Mesh {
+        let mut c = self.cursor();
+        c.refine(k);
+        c.into_mesh()
+    }
+
+    /// The finest mesh of the sequence with at most `triangles` triangles
+    /// (the base mesh if it has more).
+    pub fn mesh_at(&self, triangles: usize) -> Mesh {
+        self.mesh_at_splits(self.splits_for_triangles(triangles))
+    }
+
+    /// A cursor at the base mesh, to refine and coarsen incrementally.
+    pub fn cursor(&self) -> Cursor<'_> {
+        Cursor {
+            pm: self,
+            mesh: self.base.clone(),
+            applied: 0,
+        }
+    }
+
+    /// The fully refined mesh in the welded input's own vertex and triangle
+    /// numbering: equal, index for index, to the mesh that was simplified.
+    pub fn full_in_input_order(&self) -> Mesh {
+        let fine = self.mesh_at_splits(self.len());
+        let mut positions = vec![[0.0; 3]; fine.positions.len()];
+        for (i, p) in fine.positions.iter().enumerate() {
+            positions[self.vertex_origin[i] as usize] = *p;
+        }
+        let mut triangles = vec![[0; 3]; fine.triangles.len()];
+        for (i, t) in fine.triangles.iter().enumerate() {
+            triangles[self.triangle_origin[i] as usize] = t.map(|v| self.vertex_origin[v as usize]);
+        }
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+}
+
+/// A position in the sequence that moves one split at a time.
+#[derive(Clone, Debug)]
+pub struct Cursor<'a> {
+    pm: &'a ProgressiveMesh,
+    mesh: Mesh,
+    applied: usize,
+}
+
+impl<'a> Cursor<'a> {
+    /// Splits applied so far.
+    pub fn applied(&self) -> usize {
+        self.applied
+    }
+
+    /// The current mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    pub fn into_mesh(self) -> Mesh {
+        self.mesh
+    }
+
+    /// Apply up to `n` more splits; returns how many were applied.
+    pub fn refine(&mut self, n: usize) -> usize {
+        let end = (self.applied + n).min(self.pm.splits.len());
+        let done = end - self.applied;
+        for s in &self.pm.splits[self.applied..end] {
+            debug_assert_eq!(s.v0 as usize, self.mesh.positions.len());
+            self.mesh.positions[s.v1 as usize] = s.p1;
+            self.mesh.positions.push(s.p0);
+            self.mesh.triangles.extend_from_slice(&s.faces);
+            for c in &s.corners {
+                let corner = &mut self.mesh.triangles[c.triangle as usize][c.slot as usize];
+                debug_assert_eq!(*corner, s.v1);
+                *corner = s.v0;
+            }
+        }
+        self.applied = end;
+        done
+    }
+
+    /// Undo up to `n` splits; returns how many were undone.
+    pub fn coarsen(&mut self, n: usize) -> usize {
+        let start = self.applied.saturating_sub(n);
+        let done = self.applied - start;
+        for s in self.pm.splits[start..self.applied].iter().rev() {
+            for c in &s.corners {
+                self.mesh.triangles[c.triangle as usize][c.slot as usize] = s.v1;
+            }
+            let t = self.mesh.triangles.len() - s.faces.len();
+            self.mesh.triangles.truncate(t);
+            self.mesh.positions.pop();
+            self.mesh.positions[s.v1 as usize] = s.p_merged;
+        }
+        self.applied = start;
+        done
+    }
+
+    /// Move to exactly `k` splits.
+    pub fn seek(&mut self, k: usize) {
+        if k >= self.applied {
+            self.refine(k - self.applied);
+        } else {
+            self.coarsen(self.applied - k);
+        }
+    }
+}
