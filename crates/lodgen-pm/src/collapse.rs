@@ -198,6 +198,9 @@ pub struct Simplifier {
     mark: Vec<u32>,
     generation: u32,
     scratch: Vec<u32>,
+    /// Optional per-vertex multiplier of pair costs (curvature-weighted
+    /// modes): a pair costs `cost × max(scale[a], scale[b])`.
+    cost_scale: Option<Vec<f32>>,
 }
 
 #[inline]
@@ -339,6 +342,7 @@ impl Simplifier {
             mark: vec![0; nv],
             generation: 0,
             scratch: Vec::new(),
+            cost_scale: None,
         };
         // Non-manifold vertices (several fans meeting at one vertex).
         for v in 0..nv as u32 {
@@ -449,9 +453,27 @@ impl Simplifier {
         }
     }
 
+    /// Multiply every pair's heap key by `max(scale[a], scale[b])` (one
+    /// value per vertex, ≥ 0), and rebuild the heap. Errors recorded in the
+    /// log stay unscaled quadric errors. Panics if the length is not the
+    /// vertex count (a programming error, not input).
+    pub fn set_cost_scale(&mut self, scale: Vec<f32>) {
+        assert_eq!(scale.len(), self.pos.len(), "one scale per vertex");
+        self.cost_scale = Some(scale);
+        let mut pairs: Vec<(u32, u32)> = self.heap.drain().map(|e| (e.a, e.b)).collect();
+        pairs.retain(|&(a, b)| self.alive[a as usize] && self.alive[b as usize]);
+        pairs.sort_unstable();
+        pairs.dedup();
+        let entries: Vec<Entry> = pairs.iter().map(|&(a, b)| self.entry(a, b)).collect();
+        self.heap = BinaryHeap::from(entries);
+    }
+
     fn entry(&self, a: u32, b: u32) -> Entry {
         let (a, b) = (a.min(b), a.max(b));
-        let (_, cost) = self.target_of(a, b);
+        let (_, mut cost) = self.target_of(a, b);
+        if let Some(s) = &self.cost_scale {
+            cost *= f64::from(s[a as usize].max(s[b as usize]));
+        }
         Entry {
             cost,
             a,
