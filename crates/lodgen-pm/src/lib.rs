@@ -1,1 +1,4 @@
 //! lodgen-pm: progressive meshes by pair contraction.
+
+pub mod bvh;
+pub mod measure;
