@@ -30,14 +30,28 @@ const MAX_LEAF: usize = 4;
 /// sweep; 16 keeps the build of a 1M-triangle mesh well under a second.
 const BINS: usize = 16;
 
-/// A node of the hierarchy: an axis-aligned box and either two children (`count == 0`, children
-/// at `first` and `first + 1`) or a leaf (`count > 0`, triangle slots `first..first + count`).
+/// A node of the binary tree during the build: an axis-aligned box and either two children
+/// (`count == 0`, children at `first` and `first + 1`) or a leaf (`count > 0`, triangle slots
+/// `first..first + count`).
 #[derive(Clone, Copy, Debug)]
-struct Node {
+struct BuildNode {
     min: [f32; 3],
     max: [f32; 3],
     first: u32,
     count: u32,
+}
+
+/// An internal node as queried: the boxes of both children, stored in the parent (structure
+/// of arrays, one cache line), so a visit is one memory load and both child distances are
+/// computed side by side. Child `c` is a leaf with slots `first[c]..first[c] + count[c]` when
+/// `count[c] > 0`, else the internal node `first[c]`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node {
+    lo: [[f32; 2]; 3],
+    hi: [[f32; 2]; 3],
+    first: [u32; 2],
+    count: [u32; 2],
 }
 
 /// A bounding-volume hierarchy over the triangles of one mesh, for exact closest-point queries.
@@ -46,6 +60,14 @@ struct Node {
 /// measures the distance to those. Triangles are numbered as in the input mesh.
 #[derive(Clone, Debug)]
 pub struct TriangleBvh {
+    /// Box of the whole mesh.
+    root_lo: [f32; 3],
+    root_hi: [f32; 3],
+    /// The root as a child reference (see [`Node`]): a leaf when the mesh has at most
+    /// [`MAX_LEAF`] triangles, else internal node 0.
+    root_first: u32,
+    root_count: u32,
+    /// Internal nodes, depth first.
     nodes: Vec<Node>,
     /// Triangle corners in leaf order.
     tris: Vec<[[f32; 3]; 3]>,
@@ -177,23 +199,49 @@ pub fn closest_point_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64;
     ] // face region
 }
 
-/// Squared distance from `p` to the box of `n` (0 inside).
+/// Squared distance from `p` to the box `lo..hi` (0 inside).
 #[inline(always)]
-fn box_distance_squared(n: &Node, p: [f64; 3]) -> f64 {
+fn box_distance_squared(lo: [f32; 3], hi: [f32; 3], p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for (k, &pk) in p.iter().enumerate() {
-        let lo = f64::from(n.min[k]);
-        let hi = f64::from(n.max[k]);
-        let d = if pk < lo {
-            lo - pk
-        } else if pk > hi {
-            pk - hi
-        } else {
-            0.0
-        };
+        let d = (f64::from(lo[k]) - pk).max(pk - f64::from(hi[k])).max(0.0);
         d2 += d * d;
     }
     d2
+}
+
+/// Squared distances from `p` to the boxes of both children of `n`.
+#[inline(always)]
+fn child_distances_squared(n: &Node, p: [f64; 3]) -> [f64; 2] {
+    let mut d2 = [0.0; 2];
+    for (k, &pk) in p.iter().enumerate() {
+        for (c, acc) in d2.iter_mut().enumerate() {
+            let d = (f64::from(n.lo[k][c]) - pk)
+                .max(pk - f64::from(n.hi[k][c]))
+                .max(0.0);
+            *acc += d * d;
+        }
+    }
+    d2
+}
+
+/// `f32::min` without its NaN handling (positions are validated finite): one instruction.
+#[inline(always)]
+fn min32(a: f32, b: f32) -> f32 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
+#[inline(always)]
+fn max32(a: f32, b: f32) -> f32 {
+    if b > a {
+        b
+    } else {
+        a
+    }
 }
 
 /// Running bounds of a set of triangles or centroids.
@@ -212,16 +260,16 @@ impl Aabb {
     #[inline]
     fn grow(&mut self, other: &Aabb) {
         for k in 0..3 {
-            self.min[k] = self.min[k].min(other.min[k]);
-            self.max[k] = self.max[k].max(other.max[k]);
+            self.min[k] = min32(self.min[k], other.min[k]);
+            self.max[k] = max32(self.max[k], other.max[k]);
         }
     }
 
     #[inline]
     fn grow_point(&mut self, p: [f32; 3]) {
         for (k, &pk) in p.iter().enumerate() {
-            self.min[k] = self.min[k].min(pk);
-            self.max[k] = self.max[k].max(pk);
+            self.min[k] = min32(self.min[k], pk);
+            self.max[k] = max32(self.max[k], pk);
         }
     }
 
@@ -256,42 +304,42 @@ impl TriangleBvh {
     pub(crate) fn build_validated(mesh: MeshRef<'_>) -> TriangleBvh {
         let n = mesh.triangles.len();
         debug_assert!(u32::try_from(n).is_ok(), "more than u32::MAX triangles");
-        let corners: Vec<[[f32; 3]; 3]> = mesh
+        // Bounds, centroid and id travel together through the partitions, so every pass of
+        // the build reads memory sequentially.
+        let mut items: Vec<Item> = mesh
             .triangles
             .iter()
-            .map(|t| t.map(|v| mesh.positions[v as usize]))
-            .collect();
-        let bounds: Vec<Aabb> = corners
-            .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(id, t)| {
                 let mut b = Aabb::EMPTY;
-                c.iter().for_each(|&p| b.grow_point(p));
-                b
+                t.iter()
+                    .for_each(|&v| b.grow_point(mesh.positions[v as usize]));
+                Item {
+                    c: std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k]),
+                    b,
+                    id: id as u32,
+                }
             })
             .collect();
-        let centroids: Vec<[f32; 3]> = bounds
-            .iter()
-            .map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k]))
-            .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes: Vec<Node> = Vec::with_capacity(if n == 0 { 0 } else { 2 * n - 1 });
+        let blank = BuildNode {
+            min: [0.0; 3],
+            max: [0.0; 3],
+            first: 0,
+            count: 0,
+        };
+        let mut nodes: Vec<BuildNode> = Vec::with_capacity(if n == 0 { 0 } else { 2 * n - 1 });
         if n > 0 {
-            nodes.push(Node {
-                min: [0.0; 3],
-                max: [0.0; 3],
-                first: 0,
-                count: n as u32,
-            });
+            nodes.push(blank);
             // Work list of (node index, first slot, slot count); explicit, so a badly
             // unbalanced input cannot overflow the call stack.
             let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, n)];
             while let Some((ni, first, count)) = work.pop() {
-                let slots = &mut order[first..first + count];
+                let slots = &mut items[first..first + count];
                 let mut bb = Aabb::EMPTY;
                 let mut cb = Aabb::EMPTY;
-                for &t in slots.iter() {
-                    bb.grow(&bounds[t as usize]);
-                    cb.grow_point(centroids[t as usize]);
+                for it in slots.iter() {
+                    bb.grow(&it.b);
+                    cb.grow_point(it.c);
                 }
                 nodes[ni].min = bb.min;
                 nodes[ni].max = bb.max;
@@ -300,28 +348,41 @@ impl TriangleBvh {
                     nodes[ni].count = count as u32;
                     continue;
                 }
-                let mid = split(slots, &bounds, &centroids, &cb);
+                let mid = split(slots, &cb);
                 debug_assert!(0 < mid && mid < count);
                 let left = nodes.len();
                 nodes[ni].first = left as u32;
                 nodes[ni].count = 0;
-                let blank = Node {
-                    min: [0.0; 3],
-                    max: [0.0; 3],
-                    first: 0,
-                    count: 0,
-                };
                 nodes.push(blank);
                 nodes.push(blank);
                 work.push((left + 1, first + mid, count - mid));
                 work.push((left, first, mid));
             }
         }
-        let tris = order.iter().map(|&t| corners[t as usize]).collect();
+        let tris = items
+            .iter()
+            .map(|it| mesh.triangles[it.id as usize].map(|v| mesh.positions[v as usize]))
+            .collect();
+        let ids = items.iter().map(|it| it.id).collect();
+        let Some(root) = nodes.first() else {
+            return TriangleBvh {
+                root_lo: [0.0; 3],
+                root_hi: [0.0; 3],
+                root_first: 0,
+                root_count: 0,
+                nodes: Vec::new(),
+                tris,
+                ids,
+            };
+        };
         TriangleBvh {
-            nodes,
+            root_lo: root.min,
+            root_hi: root.max,
+            root_first: if root.count > 0 { root.first } else { 0 },
+            root_count: root.count,
+            nodes: flatten(&nodes),
             tris,
-            ids: order,
+            ids,
         }
     }
 
@@ -352,87 +413,142 @@ impl TriangleBvh {
         p: [f64; 3],
         hint: Option<u32>,
     ) -> Option<(f64, u32, [f64; 3])> {
-        let root = self.nodes.first()?;
-        let mut best_d2 = f64::INFINITY;
-        let mut best_slot = 0u32;
-        let mut best_q = [f64::NAN; 3];
+        if self.tris.is_empty() {
+            return None;
+        }
+        let mut best = (f64::INFINITY, 0u32, [f64::NAN; 3]);
         if let Some(h) = hint {
             debug_assert!((h as usize) < self.tris.len());
-            let [a, b, c] = self.tris[h as usize].map(widen);
-            best_q = closest_point_on_triangle(p, a, b, c);
-            best_d2 = distance_squared(p, best_q);
-            best_slot = h;
+            self.test_leaf(p, h, 1, &mut best);
         }
-        let mut stack: SmallVec<[(u32, f64); 64]> = SmallVec::new();
-        let d2 = box_distance_squared(root, p);
-        if d2 < best_d2 {
-            stack.push((0, d2));
-        }
-        while let Some((ni, nd2)) = stack.pop() {
-            if nd2 >= best_d2 {
-                continue;
-            }
-            let node = &self.nodes[ni as usize];
-            if node.count > 0 {
-                let first = node.first as usize;
-                for slot in first..first + node.count as usize {
-                    let [a, b, c] = self.tris[slot].map(widen);
-                    let q = closest_point_on_triangle(p, a, b, c);
-                    let d2 = distance_squared(p, q);
-                    if d2 < best_d2 {
-                        best_d2 = d2;
-                        best_slot = slot as u32;
-                        best_q = q;
-                    }
-                }
+        if box_distance_squared(self.root_lo, self.root_hi, p) < best.0 {
+            if self.root_count > 0 {
+                self.test_leaf(p, self.root_first, self.root_count, &mut best);
             } else {
-                let l = node.first;
-                let r = l + 1;
-                let dl = box_distance_squared(&self.nodes[l as usize], p);
-                let dr = box_distance_squared(&self.nodes[r as usize], p);
-                // Push the farther child first so the nearer one is searched first.
-                let (near, dn, far, df) = if dl <= dr {
-                    (l, dl, r, dr)
-                } else {
-                    (r, dr, l, dl)
-                };
-                if df < best_d2 {
-                    stack.push((far, df));
-                }
-                if dn < best_d2 {
-                    stack.push((near, dn));
-                }
+                self.search(p, &mut best);
             }
         }
         debug_assert!(
-            best_d2.is_finite(),
+            best.0.is_finite(),
             "a non-empty hierarchy always has an answer"
         );
-        Some((best_d2, best_slot, best_q))
+        Some(best)
+    }
+
+    /// Depth-first branch and bound from internal node 0, nearer child first.
+    #[inline]
+    fn search(&self, p: [f64; 3], best: &mut (f64, u32, [f64; 3])) {
+        let mut stack: SmallVec<[(u32, f64); 64]> = SmallVec::new();
+        stack.push((0, 0.0));
+        while let Some((ni, nd2)) = stack.pop() {
+            if nd2 >= best.0 {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            let d = child_distances_squared(node, p);
+            let (near, far) = if d[0] <= d[1] { (0, 1) } else { (1, 0) };
+            // Internal children go on the stack, the farther first so the nearer is popped
+            // first; leaf children are searched at once, the nearer first.
+            for c in [far, near] {
+                if node.count[c] == 0 && d[c] < best.0 {
+                    stack.push((node.first[c], d[c]));
+                }
+            }
+            for c in [near, far] {
+                if node.count[c] > 0 && d[c] < best.0 {
+                    self.test_leaf(p, node.first[c], node.count[c], best);
+                }
+            }
+        }
+    }
+
+    /// Measures slots `first..first + count`, keeping the closest in `best`.
+    #[inline(always)]
+    fn test_leaf(&self, p: [f64; 3], first: u32, count: u32, best: &mut (f64, u32, [f64; 3])) {
+        for slot in first..first + count {
+            let [a, b, c] = self.tris[slot as usize].map(widen);
+            let q = closest_point_on_triangle(p, a, b, c);
+            let d2 = distance_squared(p, q);
+            if d2 < best.0 {
+                *best = (d2, slot, q);
+            }
+        }
     }
 }
 
+/// Converts the binary build tree into query nodes (child boxes in the parent), depth first.
+fn flatten(build: &[BuildNode]) -> Vec<Node> {
+    if build[0].count > 0 {
+        return Vec::new(); // the root is a leaf
+    }
+    let mut nodes: Vec<Node> = Vec::with_capacity(build.len() / 2);
+    // (build index of an internal node, its query index)
+    let mut work: Vec<(usize, usize)> = vec![(0, 0)];
+    nodes.push(Node {
+        lo: [[0.0; 2]; 3],
+        hi: [[0.0; 2]; 3],
+        first: [0; 2],
+        count: [0; 2],
+    });
+    while let Some((bi, ni)) = work.pop() {
+        let l = build[bi].first as usize;
+        debug_assert_eq!(build[bi].count, 0);
+        for (c, child) in [l, l + 1].into_iter().enumerate() {
+            let b = &build[child];
+            for k in 0..3 {
+                nodes[ni].lo[k][c] = b.min[k];
+                nodes[ni].hi[k][c] = b.max[k];
+            }
+            nodes[ni].count[c] = b.count;
+            if b.count > 0 {
+                nodes[ni].first[c] = b.first;
+            } else {
+                let new = nodes.len();
+                nodes.push(nodes[ni]); // placeholder, overwritten when popped
+                nodes[ni].first[c] = new as u32;
+                work.push((child, new));
+            }
+        }
+    }
+    nodes
+}
+
+/// A triangle during the build.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    b: Aabb,
+    c: [f32; 3],
+    id: u32,
+}
+
 /// Splits `slots` in place into a left and right part and returns the size of the left part
-/// (`0 < mid < slots.len()`): binned SAH on the best of the three axes, object median when every
-/// centroid coincides or no bin boundary separates them.
-fn split(slots: &mut [u32], bounds: &[Aabb], centroids: &[[f32; 3]], cb: &Aabb) -> usize {
+/// (`0 < mid < slots.len()`): binned SAH on the best of the three axes (one pass bins all
+/// three), object median when every centroid coincides or no bin boundary separates them.
+fn split(slots: &mut [Item], cb: &Aabb) -> usize {
     let count = slots.len();
+    let lo: [f64; 3] = std::array::from_fn(|k| f64::from(cb.min[k]));
+    // Scale 0 on a flat axis puts everything in bin 0; such an axis then offers no split.
+    let scale: [f64; 3] = std::array::from_fn(|k| {
+        let extent = f64::from(cb.max[k]) - lo[k];
+        if extent > 0.0 {
+            BINS as f64 / extent
+        } else {
+            0.0
+        }
+    });
+    let mut bin_box = [[Aabb::EMPTY; BINS]; 3];
+    let mut bin_n = [[0usize; BINS]; 3];
+    for it in slots.iter() {
+        for axis in 0..3 {
+            let b = bin_of(it.c[axis], lo[axis], scale[axis]);
+            bin_box[axis][b].grow(&it.b);
+            bin_n[axis][b] += 1;
+        }
+    }
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, first bin on the right)
-    for (axis, (&min, &max)) in cb.min.iter().zip(&cb.max).enumerate() {
-        let lo = f64::from(min);
-        let extent = f64::from(max) - lo;
-        if extent <= 0.0 {
-            continue;
-        }
-        let scale = BINS as f64 / extent;
-        let mut bin_box = [Aabb::EMPTY; BINS];
-        let mut bin_n = [0usize; BINS];
-        for &t in slots.iter() {
-            let b = bin_of(centroids[t as usize][axis], lo, scale);
-            bin_box[b].grow(&bounds[t as usize]);
-            bin_n[b] += 1;
-        }
-        // Sweep from the right to get suffix areas, then from the left.
+    for axis in 0..3 {
+        let (bin_box, bin_n) = (&bin_box[axis], &bin_n[axis]);
+        // Sweep from the right for suffix areas, then from the left.
         let mut right_area = [0.0f64; BINS];
         let mut right_n = [0usize; BINS];
         let mut acc = Aabb::EMPTY;
@@ -458,10 +574,8 @@ fn split(slots: &mut [u32], bounds: &[Aabb], centroids: &[[f32; 3]], cb: &Aabb) 
         }
     }
     if let Some((_, axis, boundary)) = best {
-        let lo = f64::from(cb.min[axis]);
-        let scale = BINS as f64 / (f64::from(cb.max[axis]) - lo);
-        let mid = partition(slots, |t| {
-            bin_of(centroids[t as usize][axis], lo, scale) < boundary
+        let mid = partition(slots, |it| {
+            bin_of(it.c[axis], lo[axis], scale[axis]) < boundary
         });
         if 0 < mid && mid < count {
             return mid;
@@ -477,11 +591,11 @@ fn bin_of(c: f32, lo: f64, scale: f64) -> usize {
 }
 
 /// In-place partition: elements satisfying `left` first; returns how many did.
-fn partition(slots: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+fn partition(slots: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
     let mut i = 0;
     let mut j = slots.len();
     while i < j {
-        if left(slots[i]) {
+        if left(&slots[i]) {
             i += 1;
         } else {
             j -= 1;

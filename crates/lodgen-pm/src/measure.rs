@@ -376,11 +376,12 @@ impl Partial {
     }
 }
 
-/// Measures `count` points given by `point(i)` against `to`, in fixed chunks folded in order.
+/// Measures `count` points given by `point(i, cursor)` against `to`, in fixed chunks folded in
+/// order. `cursor` is per-chunk scratch for `point`, `usize::MAX` at the start of each chunk.
 fn measure_points(
     count: usize,
     to: &TriangleBvh,
-    point: impl Fn(usize) -> [f64; 3] + Sync,
+    point: impl Fn(usize, &mut usize) -> [f64; 3] + Sync,
 ) -> Partial {
     let chunks = count.div_ceil(CHUNK);
     let partials: Vec<Partial> = (0..chunks)
@@ -388,8 +389,9 @@ fn measure_points(
         .map(|c| {
             let mut acc = Partial::ZERO;
             let mut hint = None;
+            let mut cursor = usize::MAX;
             for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
-                let p = point(i);
+                let p = point(i, &mut cursor);
                 let Some((d2, slot, _)) = to.closest_slot(p, hint) else {
                     acc.add(f64::INFINITY);
                     continue;
@@ -435,6 +437,43 @@ fn triangle_area(mesh: MeshRef<'_>, t: [u32; 3]) -> f64 {
     0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
 }
 
+/// Spreads the low 21 bits of `x` to every third bit (Morton code helper).
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x001f_0000_0000_ffff;
+    x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// Morton (Z-order) codes of points quantised on a 2²¹ grid over the box `lo..hi`.
+fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
+    let q = |k: usize| {
+        let extent = hi[k] - lo[k];
+        if extent > 0.0 {
+            (((p[k] - lo[k]) / extent) * 2_097_151.0) as u64
+        } else {
+            0
+        }
+    };
+    spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
+}
+
+/// Sorts `items` (vertex or triangle ids) along the Z-order curve through `key(id)`, ties by id.
+fn z_order(items: &mut [u32], key: impl Fn(u32) -> [f64; 3], lo: [f64; 3], hi: [f64; 3]) {
+    let mut keyed: Vec<(u64, u32)> = items.iter().map(|&i| (morton(key(i), lo, hi), i)).collect();
+    keyed.sort_unstable();
+    for (dst, (_, i)) in items.iter_mut().zip(keyed) {
+        *dst = i;
+    }
+}
+
+/// The one-sided measurement. Triangles and vertices of `from` are visited along a Z-order
+/// curve, so consecutive samples are near each other: the previous answer is a tight first
+/// bound for the next query (and its BVH path is in cache), and stratifying along the curve
+/// spreads the samples evenly over the surface.
 fn one_sided_validated(
     from: MeshRef<'_>,
     to: &TriangleBvh,
@@ -445,22 +484,53 @@ fn one_sided_validated(
     if from.triangles.is_empty() {
         return Distance::NONE;
     }
-    // Cumulative areas, summed sequentially: deterministic.
-    let mut cumulative = Vec::with_capacity(from.triangles.len());
+    let nt = from.triangles.len();
+    let corners = |t: u32| from.triangles[t as usize].map(|v| widen(from.positions[v as usize]));
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut used = vec![false; from.positions.len()];
+    for t in from.triangles {
+        for &v in t {
+            used[v as usize] = true;
+            let p = widen(from.positions[v as usize]);
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    let mut order: Vec<u32> = (0..nt as u32).collect();
+    z_order(
+        &mut order,
+        |t| {
+            let [a, b, c] = corners(t);
+            std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)
+        },
+        lo,
+        hi,
+    );
+    // Cumulative areas along the curve, summed sequentially: deterministic.
+    let mut cumulative = Vec::with_capacity(nt);
     let mut total = 0.0f64;
-    for &t in from.triangles {
-        total += triangle_area(from, t);
+    for &t in &order {
+        total += triangle_area(from, from.triangles[t as usize]);
         cumulative.push(total);
     }
     let area_samples = if total > 0.0 { area_samples } else { 0 };
-    let area = measure_points(area_samples, to, |i| {
+    let area = measure_points(area_samples, to, |i, cursor| {
         let k = 3 * i as u64;
         let s = (i as f64 + unit(splitmix64(seed, k))) / area_samples as f64 * total;
-        // First triangle whose cumulative area exceeds s (skips zero-area triangles).
-        let t = cumulative
-            .partition_point(|&c| c <= s)
-            .min(from.triangles.len() - 1);
-        let [a, b, c] = from.triangles[t].map(|v| widen(from.positions[v as usize]));
+        // Position along the curve: the first triangle whose cumulative area exceeds s (so
+        // zero-area triangles are never chosen). Positions rise within a chunk, so after one
+        // binary search per chunk the cursor only walks forward.
+        if *cursor == usize::MAX {
+            *cursor = cumulative.partition_point(|&c| c <= s);
+        }
+        while *cursor < nt - 1 && cumulative[*cursor] <= s {
+            *cursor += 1;
+        }
+        let at = (*cursor).min(nt - 1);
+        let [a, b, c] = corners(order[at]);
         let mut r1 = unit(splitmix64(seed, k + 1));
         let mut r2 = unit(splitmix64(seed, k + 2));
         if r1 + r2 > 1.0 {
@@ -471,16 +541,13 @@ fn one_sided_validated(
         std::array::from_fn(|j| a[j] + r1 * (b[j] - a[j]) + r2 * (c[j] - a[j]))
     });
     let vertices = if vertex_samples {
-        let mut used = vec![false; from.positions.len()];
-        for t in from.triangles {
-            for &v in t {
-                used[v as usize] = true;
-            }
-        }
-        let list: Vec<u32> = (0..from.positions.len() as u32)
+        let mut list: Vec<u32> = (0..from.positions.len() as u32)
             .filter(|&v| used[v as usize])
             .collect();
-        measure_points(list.len(), to, |i| widen(from.positions[list[i] as usize]))
+        z_order(&mut list, |v| widen(from.positions[v as usize]), lo, hi);
+        measure_points(list.len(), to, |i, _| {
+            widen(from.positions[list[i] as usize])
+        })
     } else {
         Partial::ZERO
     };
