@@ -21,8 +21,10 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
+pub mod bvh;
 pub mod collapse;
 pub mod levels;
+pub mod measure;
 pub mod mesh;
 pub mod options;
 pub mod pairs;
