@@ -35,7 +35,7 @@ pub mod vsplit;
 pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
-pub use options::{Boundary, Placement, SimplifyOptions, Tau};
+pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
 pub use vsplit::{Corner, Cursor, ProgressiveMesh, VertexSplit};
 
 /// A simplification's result: the progressive mesh (numbered as in
