@@ -368,3 +368,34 @@ fn nan_normal_names_the_vertex() {
         "{e}"
     );
 }
+
+/// Every prefix and a few thousand single-byte corruptions of a GLB give
+/// `Ok` or a `ReadError`, never a panic.
+#[test]
+fn truncations_and_corruptions_never_panic() {
+    let (doc, bin) = document();
+    let glb = glb_bytes(&doc, &bin);
+    for len in 0..glb.len() {
+        assert!(
+            read_gltf(&glb[..len], Path::new("cut.glb")).is_err(),
+            "prefix {len}"
+        );
+    }
+    let mut seed = 0x9e37_79b9_u32;
+    for _ in 0..3000 {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        let mut bytes = glb.clone();
+        // Corrupt the binary chunk and the GLB/JSON headers, not the JSON
+        // text (whose corruptions serde_json rejects).
+        let json_len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+        let targets = [
+            seed as usize % 20,
+            20 + json_len + (seed as usize % (glb.len() - 20 - json_len)),
+        ];
+        let at = targets[(seed >> 31) as usize];
+        bytes[at] = (seed >> 16) as u8;
+        let _ = read_gltf(&bytes, Path::new("flip.glb"));
+    }
+}
