@@ -299,3 +299,103 @@ fn broken_containers() {
     let e = read_gltf(br#"{"asset": {"version": "2.0"}}"#, Path::new("j.gltf")).unwrap_err();
     assert_eq!(*e.kind, ErrorKind::EmptyMesh);
 }
+
+fn read_edited(edit: impl FnOnce(&mut Value)) -> Scene {
+    let (mut doc, bin) = document();
+    edit(&mut doc);
+    read_gltf(&gltf_bytes(doc, &bin), Path::new("e.gltf")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn sparse_accessor_overrides_base_values() {
+    let s = read_edited(|doc| {
+        // Element 2 of accessor 5 takes vertex 4 of the buffer: the sparse
+        // index is byte 2 of the strip indices (value 2), the value sits at
+        // byte 48 of the positions view.
+        doc["accessors"][5]["sparse"] = json!({
+            "count": 1,
+            "indices": {"bufferView": 4, "byteOffset": 2, "componentType": 5121},
+            "values": {"bufferView": 0, "byteOffset": 48}
+        });
+        doc["accessors"][5]["max"] = json!([2.0, 2.0, 0.0]);
+    });
+    let p = &s.meshes[1].primitives[0];
+    assert_eq!(p.positions, vec![POSITIONS[0], POSITIONS[1], POSITIONS[4]]);
+}
+
+#[test]
+fn quantized_normalized_texcoords_with_required_extension() {
+    let s = read_edited(|doc| {
+        doc["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        let n = doc["accessors"].as_array().unwrap().len();
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"bufferView": 3, "componentType": 5123, "normalized": true, "count": 3, "type": "VEC2"}));
+        doc["meshes"][1]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(n);
+    });
+    let uv = s.meshes[1].primitives[0].texcoords.clone().unwrap();
+    let q = |x: u16| x as f32 / 65535.0;
+    assert_eq!(uv, vec![[q(0), q(1)], [q(2), q(0)], [q(2), q(3)]]);
+    let Origin::Gltf { document, .. } = &s.origin else {
+        panic!("glTF origin expected");
+    };
+    assert_eq!(document.extensions_required, ["KHR_mesh_quantization"]);
+}
+
+#[test]
+fn unsupported_required_extension_is_named() {
+    let e = broken(|doc, _| doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]));
+    assert!(
+        matches!(&e.location, Location::Json(p) if p.starts_with("extensionsRequired[0]")),
+        "{e}"
+    );
+}
+
+#[test]
+fn nan_normal_names_the_vertex() {
+    let e = broken(|_, bin| {
+        bin[60 + 12 * 3 + 8..60 + 12 * 3 + 12].copy_from_slice(&f32::INFINITY.to_le_bytes())
+    });
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[0].primitives[0].attributes.NORMAL[3]".to_owned())
+    );
+    assert!(
+        e.to_string()
+            .contains("NORMAL of vertex 3 (accessor 1) is not finite (inf)"),
+        "{e}"
+    );
+}
+
+/// Every prefix and a few thousand single-byte corruptions of a GLB give
+/// `Ok` or a `ReadError`, never a panic.
+#[test]
+fn truncations_and_corruptions_never_panic() {
+    let (doc, bin) = document();
+    let glb = glb_bytes(&doc, &bin);
+    for len in 0..glb.len() {
+        assert!(
+            read_gltf(&glb[..len], Path::new("cut.glb")).is_err(),
+            "prefix {len}"
+        );
+    }
+    let mut seed = 0x9e37_79b9_u32;
+    for _ in 0..3000 {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        let mut bytes = glb.clone();
+        // Corrupt the binary chunk and the GLB/JSON headers, not the JSON
+        // text (whose corruptions serde_json rejects).
+        let json_len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+        let targets = [
+            seed as usize % 20,
+            20 + json_len + (seed as usize % (glb.len() - 20 - json_len)),
+        ];
+        let at = targets[(seed >> 31) as usize];
+        bytes[at] = (seed >> 16) as u8;
+        let _ = read_gltf(&bytes, Path::new("flip.glb"));
+    }
+}

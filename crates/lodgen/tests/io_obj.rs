@@ -285,3 +285,14 @@ fn truncated_file_fails_on_the_cut_line() {
     let e = obj_err(&full[..20]);
     assert_eq!(e.line(), Some(3));
 }
+
+/// Every prefix of a file using every statement gives `Ok` or a
+/// `ReadError`, never a panic.
+#[test]
+fn every_prefix_is_handled() {
+    let text = "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\nvn 0 0 1\n\
+        o a\nusemtl m\nf 1/1/1 2/2/1 3/1/1 4/2/1\nf -1//1 -2//1 -3//1\ng g\ns off\nf 1/2 3/1 4/2\n";
+    for len in 0..text.len() {
+        let _ = read_obj(&text.as_bytes()[..len], Path::new("cut.obj"));
+    }
+}

@@ -304,3 +304,26 @@ fn header_errors() {
     let e = ply_err(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
     assert_eq!(*e.kind, ErrorKind::EmptyMesh);
 }
+
+/// Every prefix and a few thousand single-byte corruptions of a binary
+/// file give `Ok` or a `ReadError`, never a panic (overflow checks are on in
+/// test builds).
+#[test]
+fn truncations_and_corruptions_never_panic() {
+    for big in [false, true] {
+        let full = binary_quad(big);
+        for len in 0..full.len() {
+            let _ = read_ply(&full[..len], Path::new("cut.ply"));
+        }
+        let mut seed = 0x2545_f491_u32;
+        for _ in 0..3000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            let mut bytes = full.clone();
+            let at = seed as usize % bytes.len();
+            bytes[at] = (seed >> 24) as u8;
+            let _ = read_ply(&bytes, Path::new("flip.ply"));
+        }
+    }
+}

@@ -26,9 +26,14 @@ use gltf::json::Root;
 use super::{check_not_empty, ErrorKind, Location, ReadError};
 use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
 
-/// Refuse to allocate more accessor elements than this (a corrupt `count`
-/// in an accessor without buffer view would otherwise abort on allocation).
-const MAX_ELEMENTS: usize = 1 << 28;
+/// Most elements of an accessor without buffer view (all zeros plus sparse
+/// values): a corrupt `count` would otherwise abort on allocation.
+/// Accessors with a buffer view are bounded by the buffer's size instead.
+const MAX_ELEMENTS: usize = 1 << 24;
+
+/// Required extensions this reader supports although the `gltf` crate's
+/// validation does not: quantized attributes are plain integer accessors.
+const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization"];
 
 /// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
 /// resolved against the directory of `path`.
@@ -45,6 +50,16 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
             ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
         )
     })?;
+    // The gltf crate refuses required extensions it does not know, among
+    // them some this reader handles itself; validate without those and
+    // put the list back.
+    let mut root = root;
+    let required = std::mem::take(&mut root.extensions_required);
+    root.extensions_required = required
+        .iter()
+        .filter(|e| !HANDLED_EXTENSIONS.contains(&e.as_str()))
+        .cloned()
+        .collect();
     let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => match errors.first() {
             Some((json_path, error)) => r.err(
@@ -61,7 +76,8 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
             ErrorKind::Invalid(format!("invalid glTF: {other}")),
         ),
     })?;
-    let root = document.into_json();
+    let mut root = document.into_json();
+    root.extensions_required = required;
     let buffers = r.load_buffers(&root, blob)?;
 
     let materials = root
@@ -260,22 +276,6 @@ impl Reader<'_> {
             .ok_or_else(|| self.json_err(at, "primitive has no POSITION attribute".to_owned()))?;
         let positions: Vec<[f32; 3]> = self.vectors(root, buffers, pos_acc, &pos_at)?;
         let n = positions.len();
-        if let Some(i) = positions
-            .iter()
-            .position(|p| p.iter().any(|x| !x.is_finite()))
-        {
-            let bad = positions[i]
-                .into_iter()
-                .find(|x| !x.is_finite())
-                .unwrap_or(f32::NAN);
-            return Err(self.err(
-                Location::Json(format!("{pos_at}[{i}]")),
-                ErrorKind::NonFinite {
-                    what: format!("POSITION of vertex {i} (accessor {pos_acc})"),
-                    value: bad,
-                },
-            ));
-        }
         let normals = match attribute(Semantic::Normals) {
             Some(a) => Some(self.same_count(
                 self.vectors(root, buffers, a, &format!("{at}.attributes.NORMAL"))?,
@@ -386,10 +386,25 @@ impl Reader<'_> {
                 format!("accessor {index} has {dims} components, expected {N}"),
             ));
         }
-        Ok(values
+        let out: Vec<[f32; N]> = values
             .chunks_exact(N)
             .map(|c| std::array::from_fn(|k| c[k] as f32))
-            .collect())
+            .collect();
+        if let Some(i) = out.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+            let value = out[i]
+                .into_iter()
+                .find(|x| !x.is_finite())
+                .unwrap_or(f32::NAN);
+            let name = at.rsplit('.').next().unwrap_or(at);
+            return Err(self.err(
+                Location::Json(format!("{at}[{i}]")),
+                ErrorKind::NonFinite {
+                    what: format!("{name} of vertex {i} (accessor {index})"),
+                    value,
+                },
+            ));
+        }
+        Ok(out)
     }
 
     /// Reads every component of accessor `index` (sparse applied,
@@ -418,16 +433,23 @@ impl Reader<'_> {
             Checked::Valid(Type::Vec4) => 4,
             _ => return Err(bad("accessor type is not SCALAR or VEC2..4".to_owned())),
         };
-        let count = usize::try_from(acc.count.0)
-            .ok()
-            .filter(|&c| c <= MAX_ELEMENTS);
-        let count = count.ok_or_else(|| bad(format!("count {} is too large", acc.count.0)))?;
+        let count = usize::try_from(acc.count.0).unwrap_or(usize::MAX);
         let elem = component_size(ct) * dims;
+        // Check the data is there before allocating for it.
+        let data = match acc.buffer_view {
+            Some(view) => {
+                let offset = acc.byte_offset.map_or(0, |o| o.0);
+                Some(self.view(root, buffers, view.value(), offset, count, elem, &here)?)
+            }
+            None if count > MAX_ELEMENTS => {
+                return Err(bad(format!(
+                    "count {count} without bufferView is too large"
+                )));
+            }
+            None => None,
+        };
         let mut values = vec![0.0f64; count * dims];
-        if let Some(view) = acc.buffer_view {
-            let offset = acc.byte_offset.map_or(0, |o| o.0);
-            let (data, stride) =
-                self.view(root, buffers, view.value(), offset, count, elem, &here)?;
+        if let Some((data, stride)) = data {
             for i in 0..count {
                 read_element(
                     &data[i * stride..],

@@ -12,6 +12,8 @@
 //!   first use, so the output is a pure function of the input bytes.
 //! - Non-finite coordinates, out-of-range indices, truncated data and a
 //!   scene without a single triangle are errors.
+//! - Texture coordinates use glTF's convention (origin at the top left):
+//!   OBJ and PLY `v` is flipped to `1 - v`, glTF input is kept as is.
 //!
 //! [`read_scene`] picks the reader from the content (GLB magic `glTF`, a
 //! `ply` header line, a JSON object) and else from the extension

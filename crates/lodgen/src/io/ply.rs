@@ -111,6 +111,7 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
     let mut texcoords: Vec<[f32; 2]> = Vec::new();
     let mut indices: Vec<u32> = Vec::new();
     let mut list: Vec<f64> = Vec::new();
+    let mut resolved: Vec<u32> = Vec::new();
 
     for element in &elements {
         let roles = if element.name == "vertex" {
@@ -189,7 +190,7 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
                     texcoords.push([t[0], 1.0 - t[1]]);
                 }
             } else if index_list.is_some() {
-                let mut resolved = Vec::with_capacity(list.len());
+                resolved.clear();
                 for &raw in &list {
                     if raw == -1.0 && element.name == "tristrips" {
                         resolved.push(u32::MAX);
