@@ -20,7 +20,7 @@
 //! splittable pseudorandom number generators", OOPSLA 2014) indexed by sample number, so sample
 //! `i` is a pure function of `(seed, i)`.
 //!
-//! Determinism: samples are processed in fixed chunks of [`CHUNK`] consecutive indices; each
+//! Determinism: samples are processed in fixed chunks of 4,096 consecutive indices; each
 //! chunk's sums are computed sequentially and the chunk results are folded in index order. The
 //! result is therefore bit-identical whatever the number of rayon threads.
 
