@@ -1,7 +1,7 @@
 //! Times `lodgen_pm::measure::measure` on the bunny against a crude ~1.4k-triangle copy made by
 //! vertex clustering (Rossignac–Borrel), the size of a 2% level.
 //!
-//! `cargo run --release -p lodgen-pm --example measure_bunny [path/to/bunny.obj] [runs]`
+//! `cargo run --release -p lodgen-pm --example measure_bunny [path/to/bunny.obj] [runs] [cells] [densities]`
 
 use std::time::Instant;
 
@@ -93,7 +93,8 @@ fn main() {
         .unwrap_or_else(|| "/work/shared/assets/bunny.obj".into());
     let runs: usize = args.get(2).map_or(10, |s| s.parse().unwrap());
     let (v, f) = load_obj(&path);
-    let (cv, cf) = cluster(&v, &f, 24.0);
+    let cells: f32 = args.get(3).map_or(15.0, |s| s.parse().unwrap());
+    let (cv, cf) = cluster(&v, &f, cells);
     let a = MeshRef::new(&v, &f);
     let b = MeshRef::new(&cv, &cf);
     let opts = MeasureOptions::DEFAULT;
@@ -161,7 +162,12 @@ fn main() {
         best[0], best[1], best[2], best[3], best[4]
     );
     // Sensitivity of the estimate to density, for the record.
-    for per in [8.0, 32.0] {
+    let densities: &[f64] = if args.get(4).is_some_and(|s| s == "densities") {
+        &[1.0, 4.0, 8.0, 32.0]
+    } else {
+        &[]
+    };
+    for &per in densities {
         let t = Instant::now();
         let r = measure(a, b, &opts.with_samples_per_triangle(per)).unwrap();
         println!(

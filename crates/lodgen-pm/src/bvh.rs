@@ -9,15 +9,13 @@
 //!   2005, §5.1.5 "Closest point on triangle to point" (Voronoi-region tests, no square roots),
 //!   made robust for zero-area triangles by falling back to the three edges.
 //! - Build: binned surface-area heuristic, I. Wald, "On fast construction of SAH-based bounding
-//!   volume hierarchies", IEEE Symposium on Interactive Ray Tracing 2007 (16 bins, all three
-//!   axes, object-median fallback when every centroid coincides).
+//!   volume hierarchies", IEEE Symposium on Interactive Ray Tracing 2007 (16 bins along the
+//!   axis of largest centroid spread, object-median fallback when every centroid coincides).
 //! - Query: depth-first, nearer child first, a subtree is skipped when its box is no closer than
 //!   the best triangle found so far (branch and bound).
 //!
 //! Bounds are stored as `f32`; since the input positions are `f32`, the min/max of a set of them
 //! is exact, so the boxes are tight and conservative. All distance arithmetic is `f64`.
-
-use smallvec::SmallVec;
 
 use crate::measure::{MeshError, MeshRef};
 
@@ -26,9 +24,18 @@ use crate::measure::{MeshError, MeshRef};
 /// one triangle test, and 1-triangle leaves double the node count for no gain).
 const MAX_LEAF: usize = 4;
 
-/// Bins per axis for the binned SAH. Wald (2007) finds 8–32 within a few percent of a full
-/// sweep; 16 keeps the build of a 1M-triangle mesh well under a second.
+/// Bins for the binned SAH. Wald (2007) bins into a small fixed number of buckets (16 there)
+/// and finds the trees close to a full SAH sweep at a fraction of the build time.
 const BINS: usize = 16;
+
+/// Below this depth the build splits by SAH; deeper, by object median, which halves the count
+/// at every level. So the depth never exceeds `MAX_SAH_DEPTH + 32` (for < 2³² triangles) and a
+/// query's stack (at most depth + 1 entries) fits in [`STACK`] entries without allocating. SAH
+/// trees of real meshes are far shallower (the bunny's is about 20 levels).
+const MAX_SAH_DEPTH: usize = 48;
+
+/// Traversal stack size; see [`MAX_SAH_DEPTH`].
+const STACK: usize = MAX_SAH_DEPTH + 34;
 
 /// A node of the binary tree during the build: an axis-aligned box and either two children
 /// (`count == 0`, children at `first` and `first + 1`) or a leaf (`count > 0`, triangle slots
@@ -69,6 +76,8 @@ pub struct TriangleBvh {
     root_count: u32,
     /// Internal nodes, depth first.
     nodes: Vec<Node>,
+    /// Levels of the tree (0 without triangles, 1 when the root is a leaf).
+    depth: usize,
     /// Triangle corners in leaf order.
     tris: Vec<[[f32; 3]; 3]>,
     /// Input triangle index of each slot of `tris`.
@@ -204,7 +213,7 @@ pub fn closest_point_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64;
 fn box_distance_squared(lo: [f32; 3], hi: [f32; 3], p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for (k, &pk) in p.iter().enumerate() {
-        let d = (f64::from(lo[k]) - pk).max(pk - f64::from(hi[k])).max(0.0);
+        let d = max64(max64(f64::from(lo[k]) - pk, pk - f64::from(hi[k])), 0.0);
         d2 += d * d;
     }
     d2
@@ -216,13 +225,24 @@ fn child_distances_squared(n: &Node, p: [f64; 3]) -> [f64; 2] {
     let mut d2 = [0.0; 2];
     for (k, &pk) in p.iter().enumerate() {
         for (c, acc) in d2.iter_mut().enumerate() {
-            let d = (f64::from(n.lo[k][c]) - pk)
-                .max(pk - f64::from(n.hi[k][c]))
-                .max(0.0);
+            let d = max64(
+                max64(f64::from(n.lo[k][c]) - pk, pk - f64::from(n.hi[k][c])),
+                0.0,
+            );
             *acc += d * d;
         }
     }
     d2
+}
+
+/// `f64::max` without its NaN handling (one `maxsd`); inputs are finite.
+#[inline(always)]
+fn max64(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
 }
 
 /// `f32::min` without its NaN handling (positions are validated finite): one instruction.
@@ -327,13 +347,15 @@ impl TriangleBvh {
             first: 0,
             count: 0,
         };
+        let mut max_depth = 0;
         let mut nodes: Vec<BuildNode> = Vec::with_capacity(if n == 0 { 0 } else { 2 * n - 1 });
         if n > 0 {
             nodes.push(blank);
             // Work list of (node index, first slot, slot count); explicit, so a badly
             // unbalanced input cannot overflow the call stack.
-            let mut work: Vec<(usize, usize, usize)> = vec![(0, 0, n)];
-            while let Some((ni, first, count)) = work.pop() {
+            let mut work: Vec<(usize, usize, usize, usize)> = vec![(0, 0, n, 0)];
+            while let Some((ni, first, count, depth)) = work.pop() {
+                max_depth = max_depth.max(depth + 1);
                 let slots = &mut items[first..first + count];
                 let mut bb = Aabb::EMPTY;
                 let mut cb = Aabb::EMPTY;
@@ -348,15 +370,19 @@ impl TriangleBvh {
                     nodes[ni].count = count as u32;
                     continue;
                 }
-                let mid = split(slots, &cb);
+                let mid = if depth < MAX_SAH_DEPTH {
+                    split(slots, &cb)
+                } else {
+                    median_split(slots, &cb)
+                };
                 debug_assert!(0 < mid && mid < count);
                 let left = nodes.len();
                 nodes[ni].first = left as u32;
                 nodes[ni].count = 0;
                 nodes.push(blank);
                 nodes.push(blank);
-                work.push((left + 1, first + mid, count - mid));
-                work.push((left, first, mid));
+                work.push((left + 1, first + mid, count - mid, depth + 1));
+                work.push((left, first, mid, depth + 1));
             }
         }
         let tris = items
@@ -371,6 +397,7 @@ impl TriangleBvh {
                 root_first: 0,
                 root_count: 0,
                 nodes: Vec::new(),
+                depth: 0,
                 tris,
                 ids,
             };
@@ -381,6 +408,7 @@ impl TriangleBvh {
             root_first: if root.count > 0 { root.first } else { 0 },
             root_count: root.count,
             nodes: flatten(&nodes),
+            depth: max_depth,
             tris,
             ids,
         }
@@ -389,6 +417,12 @@ impl TriangleBvh {
     /// Number of triangles in the hierarchy.
     pub fn len(&self) -> usize {
         self.ids.len()
+    }
+
+    /// Levels of the tree: 0 without triangles, 1 when a single leaf holds them all. At most
+    /// `MAX_SAH_DEPTH + 33`, however the triangles are placed.
+    pub fn depth(&self) -> usize {
+        self.depth
     }
 
     /// True when the mesh had no triangles; then every query returns `None`.
@@ -438,9 +472,11 @@ impl TriangleBvh {
     /// Depth-first branch and bound from internal node 0, nearer child first.
     #[inline]
     fn search(&self, p: [f64; 3], best: &mut (f64, u32, [f64; 3])) {
-        let mut stack: SmallVec<[(u32, f64); 64]> = SmallVec::new();
-        stack.push((0, 0.0));
-        while let Some((ni, nd2)) = stack.pop() {
+        let mut stack = [(0u32, 0.0f64); STACK];
+        let mut len = 1;
+        while len > 0 {
+            len -= 1;
+            let (ni, nd2) = stack[len];
             if nd2 >= best.0 {
                 continue;
             }
@@ -451,7 +487,9 @@ impl TriangleBvh {
             // first; leaf children are searched at once, the nearer first.
             for c in [far, near] {
                 if node.count[c] == 0 && d[c] < best.0 {
-                    stack.push((node.first[c], d[c]));
+                    debug_assert!(len < STACK, "tree deeper than MAX_SAH_DEPTH allows");
+                    stack[len] = (node.first[c], d[c]);
+                    len += 1;
                 }
             }
             for c in [near, far] {
@@ -522,32 +560,28 @@ struct Item {
 }
 
 /// Splits `slots` in place into a left and right part and returns the size of the left part
-/// (`0 < mid < slots.len()`): binned SAH on the best of the three axes (one pass bins all
-/// three), object median when every centroid coincides or no bin boundary separates them.
+/// (`0 < mid < slots.len()`): binned SAH along the axis where the centroids spread most (as in
+/// Wald 2007), object median when every centroid coincides or no bin boundary separates them.
 fn split(slots: &mut [Item], cb: &Aabb) -> usize {
     let count = slots.len();
-    let lo: [f64; 3] = std::array::from_fn(|k| f64::from(cb.min[k]));
-    // Scale 0 on a flat axis puts everything in bin 0; such an axis then offers no split.
-    let scale: [f64; 3] = std::array::from_fn(|k| {
-        let extent = f64::from(cb.max[k]) - lo[k];
-        if extent > 0.0 {
-            BINS as f64 / extent
-        } else {
-            0.0
+    let extent: [f64; 3] = std::array::from_fn(|k| f64::from(cb.max[k]) - f64::from(cb.min[k]));
+    let axis = if extent[0] >= extent[1] && extent[0] >= extent[2] {
+        0
+    } else if extent[1] >= extent[2] {
+        1
+    } else {
+        2
+    };
+    if extent[axis] > 0.0 {
+        let lo = f64::from(cb.min[axis]);
+        let scale = BINS as f64 / extent[axis];
+        let mut bin_box = [Aabb::EMPTY; BINS];
+        let mut bin_n = [0usize; BINS];
+        for it in slots.iter() {
+            let b = bin_of(it.c[axis], lo, scale);
+            bin_box[b].grow(&it.b);
+            bin_n[b] += 1;
         }
-    });
-    let mut bin_box = [[Aabb::EMPTY; BINS]; 3];
-    let mut bin_n = [[0usize; BINS]; 3];
-    for it in slots.iter() {
-        for axis in 0..3 {
-            let b = bin_of(it.c[axis], lo[axis], scale[axis]);
-            bin_box[axis][b].grow(&it.b);
-            bin_n[axis][b] += 1;
-        }
-    }
-    let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, first bin on the right)
-    for axis in 0..3 {
-        let (bin_box, bin_n) = (&bin_box[axis], &bin_n[axis]);
         // Sweep from the right for suffix areas, then from the left.
         let mut right_area = [0.0f64; BINS];
         let mut right_n = [0usize; BINS];
@@ -559,6 +593,7 @@ fn split(slots: &mut [Item], cb: &Aabb) -> usize {
             right_area[b] = acc.half_area();
             right_n[b] = n;
         }
+        let mut best: Option<(f64, usize)> = None; // (cost, first bin on the right)
         let mut acc = Aabb::EMPTY;
         let mut n = 0;
         for b in 1..BINS {
@@ -568,21 +603,35 @@ fn split(slots: &mut [Item], cb: &Aabb) -> usize {
                 continue;
             }
             let cost = acc.half_area() * n as f64 + right_area[b] * right_n[b] as f64;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, b));
             }
         }
-    }
-    if let Some((_, axis, boundary)) = best {
-        let mid = partition(slots, |it| {
-            bin_of(it.c[axis], lo[axis], scale[axis]) < boundary
-        });
-        if 0 < mid && mid < count {
-            return mid;
+        if let Some((_, boundary)) = best {
+            let mid = partition(slots, |it| bin_of(it.c[axis], lo, scale) < boundary);
+            if 0 < mid && mid < count {
+                return mid;
+            }
         }
     }
     // All centroids equal (or rounding put them in one bin): any split is as good as another.
     count / 2
+}
+
+/// Object-median split along the axis of largest centroid spread: the left half gets the
+/// `len / 2` smallest centroids (ties broken by triangle id, so the result is deterministic).
+fn median_split(slots: &mut [Item], cb: &Aabb) -> usize {
+    let axis = (0..3)
+        .max_by(|&i, &j| {
+            let e = |k: usize| f64::from(cb.max[k]) - f64::from(cb.min[k]);
+            e(i).total_cmp(&e(j)).then(j.cmp(&i))
+        })
+        .unwrap_or(0);
+    let mid = slots.len() / 2;
+    slots.select_nth_unstable_by(mid, |x, y| {
+        x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id))
+    });
+    mid
 }
 
 #[inline]

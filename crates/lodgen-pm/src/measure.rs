@@ -20,7 +20,7 @@
 //! splittable pseudorandom number generators", OOPSLA 2014) indexed by sample number, so sample
 //! `i` is a pure function of `(seed, i)`.
 //!
-//! Determinism: samples are processed in fixed chunks of [`CHUNK`] consecutive indices; each
+//! Determinism: samples are processed in fixed chunks of 4,096 consecutive indices; each
 //! chunk's sums are computed sequentially and the chunk results are folded in index order. The
 //! result is therefore bit-identical whatever the number of rayon threads.
 
@@ -121,14 +121,14 @@ impl<'a> MeshRef<'a> {
 ///
 /// Default sampling: 2 area samples per triangle of the larger mesh, in each direction, at
 /// least 10,000. For the bunny (69,451 triangles) against any coarser level that is 138,902
-/// area samples per direction, plus the vertices (34,834 on the original side), so about
-/// 310,000 distance queries in all. Reason: the spacing of samples is then about half the
-/// finer mesh's mean edge length (an equilateral triangle of edge e holding 2 samples gives a
-/// spacing of √(0.433e²/2) ≈ 0.47e), so a feature the fine mesh can represent is hit by
-/// several samples, and the mean/RMS estimates carry a relative sampling error well under 1%
-/// (stratified sampling: each triangle gets its share to within one sample); more samples move
-/// the Hausdorff estimate by a fraction of a percent of itself on the bunny's levels at
-/// several times the cost.
+/// area samples per direction plus the vertices (34,834 on the original side), about 310,000
+/// distance queries in all. Why 2: the samples are then about half the finer mesh's mean edge
+/// length apart (an equilateral triangle of edge e holding 2 samples gives a spacing of
+/// √(0.433e²/2) ≈ 0.47e), so any feature the fine mesh can represent is hit by several samples.
+/// Measured on the bunny against a 1,454-triangle clustering of it (example `measure_bunny`):
+/// RMS is 0.4709 % of the diagonal at 2 per triangle and 0.4710 % at 32; the Hausdorff estimate
+/// is 2.56 % at 2 and 2.62 % at 32 (a maximum over samples only creeps up with density), for
+/// 16 times the cost.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct MeasureOptions {
@@ -293,14 +293,17 @@ pub fn measure(
 ) -> Result<ErrorReport, MeasureError> {
     a.validate().map_err(MeasureError::A)?;
     b.validate().map_err(MeasureError::B)?;
-    let (bvh_a, bvh_b) = rayon::join(
-        || TriangleBvh::build_validated(a),
-        || TriangleBvh::build_validated(b),
-    );
     let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
+    // A→B needs only B's hierarchy, so it runs while A's (usually the larger) is being built.
     // Different streams for the two directions, so that measuring a mesh against itself does
     // not sample the same points twice.
-    let a_to_b = one_sided_validated(a, &bvh_b, n, opts.vertex_samples, opts.seed);
+    let (bvh_a, a_to_b) = rayon::join(
+        || TriangleBvh::build_validated(a),
+        || {
+            let bvh_b = TriangleBvh::build_validated(b);
+            one_sided_validated(a, &bvh_b, n, opts.vertex_samples, opts.seed)
+        },
+    );
     let b_to_a = one_sided_validated(
         b,
         &bvh_a,

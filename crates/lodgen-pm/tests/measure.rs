@@ -200,10 +200,47 @@ proptest! {
     }
 }
 
+/// Triangles at x = 2^i: the SAH splits off a few triangles per level, so the build must switch
+/// to median splits to keep the tree (and the query stack) shallow; answers stay exact.
+#[test]
+fn bvh_on_exponentially_spaced_triangles_matches_brute_force() {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for i in -120..120 {
+        let x = 2f32.powi(i);
+        let v = positions.len() as u32;
+        positions.extend([[x, 0.0, 0.0], [x, x, 0.0], [x, 0.0, x]]);
+        triangles.push([v, v + 1, v + 2]);
+    }
+    let bvh = TriangleBvh::new(MeshRef::new(&positions, &triangles)).unwrap();
+    // Unchecked, the SAH chains about 70 levels deep here (it splits off ~3 triangles per
+    // level); the build stops it at 48 and median-splits the ~100 left: log2(100 / 4) rounded
+    // up, plus the leaf level.
+    assert!(bvh.depth() <= 48 + 6, "depth {}", bvh.depth());
+    assert!(
+        bvh.depth() > 40,
+        "the SAH should chain here; depth {}",
+        bvh.depth()
+    );
+    for i in (-122..122).step_by(3) {
+        let p = [2f64.powi(i) * 1.3, 0.25, -0.5];
+        let brute = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| positions[v as usize].map(f64::from));
+                distance_squared(p, closest_point_on_triangle(p, a, b, c))
+            })
+            .fold(f64::INFINITY, f64::min);
+        let (d2, _, _) = bvh.closest_point(p).unwrap();
+        assert!((d2 - brute).abs() <= 1e-12 * brute, "{i}: {d2} vs {brute}");
+    }
+}
+
 #[test]
 fn empty_bvh_answers_none() {
     let bvh = TriangleBvh::new(MeshRef::new(&[[0.0; 3]], &[])).unwrap();
     assert!(bvh.is_empty());
+    assert_eq!(bvh.depth(), 0);
     assert_eq!(bvh.closest_point([1.0, 2.0, 3.0]), None);
 }
 
