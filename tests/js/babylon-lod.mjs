@@ -19,6 +19,7 @@
 // counts. Fails (exit 1) on any mismatch, page error, console error, failed
 // request, or after the timeout (default 90 s). Exit 2 on bad usage.
 
+import crypto from 'node:crypto';
 import fs from 'node:fs';
 import http from 'node:http';
 import os from 'node:os';
@@ -185,9 +186,20 @@ function startServer(routes, requests) {
   });
 }
 
+// The bundle is cached in node_modules/.cache, keyed by the page source and
+// the installed package versions (npm ci empties node_modules, hence the cache).
 async function bundlePage() {
+  const entry = path.join(HERE, 'babylon-lod-page.js');
+  const key = crypto
+    .createHash('sha256')
+    .update(fs.readFileSync(entry))
+    .update(fs.readFileSync(path.join(HERE, 'package-lock.json')))
+    .digest('hex')
+    .slice(0, 16);
+  const cached = path.join(HERE, 'node_modules', '.cache', 'lodgen', `babylon-lod-page-${key}.js`);
+  if (fs.existsSync(cached)) return fs.readFileSync(cached);
   const r = await esbuild.build({
-    entryPoints: [path.join(HERE, 'babylon-lod-page.js')],
+    entryPoints: [entry],
     absWorkingDir: HERE,
     bundle: true,
     format: 'esm',
@@ -195,7 +207,11 @@ async function bundlePage() {
     write: false,
     logLevel: 'silent',
   });
-  return Buffer.from(r.outputFiles[0].contents);
+  const js = Buffer.from(r.outputFiles[0].contents);
+  fs.mkdirSync(path.dirname(cached), { recursive: true });
+  fs.writeFileSync(`${cached}.tmp${process.pid}`, js);
+  fs.renameSync(`${cached}.tmp${process.pid}`, cached);
+  return js;
 }
 
 const HTML = `<!doctype html>
