@@ -3,12 +3,16 @@
 use std::path::PathBuf;
 
 mod bench;
+mod draco;
 mod golden;
+mod test;
 
 const USAGE: &str = "usage: cargo xtask <task> [args]
 
 tasks:
-  golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and the example mesh
+  test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
+  draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
+  golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny";
 
 fn main() -> anyhow::Result<()> {
@@ -18,6 +22,8 @@ fn main() -> anyhow::Result<()> {
         std::process::exit(2);
     };
     match task.as_str() {
+        "test" => test::run(rest),
+        "draco" => draco::run(rest),
         "golden" => golden::run(rest),
         "bench" => bench::run(rest),
         "bench-child" => bench::child(rest),
