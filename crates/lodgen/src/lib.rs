@@ -1,4 +1,7 @@
 //! lodgen: mesh readers, the LOD builder, the glTF `MSFT_lod` writer and the
 //! `lodgen` command, on top of the `lodgen-pm` core.
 
+pub mod coverage;
+pub mod gltf_out;
+pub mod inspect;
 pub mod scene;
