@@ -1166,9 +1166,12 @@ fn gltf_document(
                         format!("buffer {} has no data", view.buffer.value()),
                     )
                 })?;
-                let start = view.byte_offset.map_or(0, |o| o.0 as usize);
-                let end = start + view.byte_length.0 as usize;
-                data.get(start..end)
+                let start = view.byte_offset.map_or(0, |o| o.0);
+                let end = start.saturating_add(view.byte_length.0);
+                usize::try_from(start)
+                    .ok()
+                    .zip(usize::try_from(end).ok())
+                    .and_then(|(start, end)| data.get(start..end))
                     .ok_or_else(|| input_err(at.clone(), "bufferView exceeds its buffer".into()))?
                     .to_vec()
             } else if let Some(uri) = obj.get("uri").and_then(Value::as_str) {
@@ -1212,6 +1215,18 @@ fn gltf_document(
         Some(Value::Array(n)) => n,
         _ => Vec::new(),
     };
+    for node in &mut nodes {
+        // Node extensions that point at mesh data (instancing accessors) or
+        // at the input's own LOD chains no longer apply.
+        if let Some(Value::Object(ext)) = node.get_mut("extensions") {
+            ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
+            if ext.is_empty() {
+                if let Some(obj) = node.as_object_mut() {
+                    obj.remove("extensions");
+                }
+            }
+        }
+    }
     let original_count = nodes.len();
     for i in 0..original_count {
         let Some(mesh) = nodes[i].get("mesh").and_then(Value::as_u64) else {

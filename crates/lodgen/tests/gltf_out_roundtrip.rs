@@ -445,11 +445,13 @@ fn gltf_scene() -> (Scene, LodMesh) {
     };
     let doc: gltf_json::Root = serde_json::from_value(serde_json::json!({
         "asset": {"version": "2.0", "copyright": "test"},
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [
             {"name": "Parent", "translation": [1.0, 2.0, 3.0], "children": [1]},
-            {"name": "Child", "rotation": [0.0, 0.6, 0.0, 0.8], "mesh": 0}
+            {"name": "Child", "rotation": [0.0, 0.6, 0.0, 0.8], "mesh": 0,
+             "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0}}}}
         ],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
         "accessors": [{"componentType": 5126, "count": 3, "type": "VEC3"}],
@@ -506,6 +508,13 @@ fn gltf_origin_keeps_hierarchy_materials_and_images() {
         nodes[1]["extensions"]["MSFT_lod"]["ids"],
         serde_json::json!([2, 3])
     );
+    let ext: Vec<&String> = nodes[1]["extensions"].as_object().unwrap().keys().collect();
+    assert_eq!(
+        ext,
+        ["MSFT_lod"],
+        "the input's instancing accessors are gone"
+    );
+    assert_eq!(json["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
     for n in [2, 3] {
         assert_eq!(
             nodes[n]["rotation"], nodes[1]["rotation"],
