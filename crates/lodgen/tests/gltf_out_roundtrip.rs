@@ -431,6 +431,9 @@ const PNG_2X2: [u8; 75] = [
     96, 130,
 ];
 
+const KEYS: [f32; 2] = [0.0, 1.0];
+const TRANSLATIONS: [[f32; 3]; 2] = [[1.0, 2.0, 3.0], [1.0, 5.0, 3.0]];
+
 /// A glTF input: Parent (translated) → Child (rotated, mesh 0), a textured
 /// material, a sampler and a PNG in a buffer view.
 fn gltf_scene() -> (Scene, LodMesh) {
@@ -454,17 +457,36 @@ fn gltf_scene() -> (Scene, LodMesh) {
              "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0}}}}
         ],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "accessors": [{"componentType": 5126, "count": 3, "type": "VEC3"}],
+        "accessors": [
+            {"componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0.0], "max": [1.0]},
+            {"bufferView": 2, "componentType": 5126, "count": 2, "type": "VEC3"}
+        ],
+        "animations": [{
+            "channels": [
+                {"sampler": 0, "target": {"node": 0, "path": "translation"}},
+                {"sampler": 0, "target": {"node": 1, "path": "weights"}}
+            ],
+            "samplers": [{"input": 1, "output": 2}]
+        }],
         "materials": [{"name": "tex", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0, "sampler": 0}],
         "samplers": [{"magFilter": 9728, "minFilter": 9728}],
         "images": [{"bufferView": 0, "mimeType": "image/png"}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 4, "byteLength": PNG_2X2.len()}],
-        "buffers": [{"byteLength": PNG_2X2.len() + 4}]
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 4, "byteLength": PNG_2X2.len()},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 8},
+            {"buffer": 0, "byteOffset": 88, "byteLength": 24}
+        ],
+        "buffers": [{"byteLength": 112}]
     }))
     .unwrap();
     let mut data = vec![0u8; 4];
     data.extend_from_slice(&PNG_2X2);
+    data.resize(80, 0);
+    for v in KEYS.iter().chain(TRANSLATIONS.iter().flatten()) {
+        data.extend_from_slice(&v.to_le_bytes());
+    }
     let scene = Scene {
         meshes: vec![SourceMesh {
             name: "sphere".into(),
@@ -530,19 +552,69 @@ fn gltf_origin_keeps_hierarchy_materials_and_images() {
     assert_eq!(json["samplers"][0]["magFilter"], 9728);
     let image_view = json["images"][0]["bufferView"].as_u64().unwrap() as usize;
     assert_eq!(view_bytes(&json, &buffers, image_view), PNG_2X2);
-    // The image range comes before every level's range.
-    let image_end = json["bufferViews"][image_view]["byteOffset"]
-        .as_u64()
+    // Non-LOD data (image, keyframes) comes before every level's range.
+    let mesh_views: Vec<u64> = json["meshes"]
+        .as_array()
         .unwrap()
-        + PNG_2X2.len() as u64;
-    for (v, bv) in json["bufferViews"].as_array().unwrap().iter().enumerate() {
-        if v != image_view {
-            assert!(bv["byteOffset"].as_u64().unwrap() >= image_end);
-        }
+        .iter()
+        .flat_map(|m| m["primitives"].as_array().unwrap().iter())
+        .flat_map(|p| {
+            let mut a: Vec<u64> = p["attributes"]
+                .as_object()
+                .unwrap()
+                .values()
+                .map(|v| v.as_u64().unwrap())
+                .collect();
+            a.push(p["indices"].as_u64().unwrap());
+            a
+        })
+        .map(|a| {
+            json["accessors"][a as usize]["bufferView"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    let span = |v: usize| {
+        let bv = &json["bufferViews"][v];
+        let o = bv["byteOffset"].as_u64().unwrap_or(0);
+        (o, o + bv["byteLength"].as_u64().unwrap())
+    };
+    let views = json["bufferViews"].as_array().unwrap().len();
+    let shared_end = (0..views)
+        .filter(|v| !mesh_views.contains(&(*v as u64)))
+        .map(|v| span(v).1)
+        .max()
+        .unwrap();
+    assert!(!mesh_views.contains(&(image_view as u64)));
+    for &v in &mesh_views {
+        assert!(
+            span(v as usize).0 >= shared_end,
+            "level data before non-LOD data"
+        );
     }
     let prim = &json["meshes"][0]["primitives"][0];
     assert!(prim["attributes"].get("TEXCOORD_0").is_some());
     assert_eq!(prim["material"], 0);
+    let animation = &json["animations"][0];
+    assert_eq!(
+        animation["channels"].as_array().unwrap().len(),
+        1,
+        "weights channel dropped"
+    );
+    assert_eq!(animation["channels"][0]["target"]["path"], "translation");
+    let sampler = &animation["samplers"][0];
+    let keys = accessor_values(&json, &buffers, sampler["input"].as_u64().unwrap() as usize);
+    assert_eq!(keys, [[0.0], [1.0]]);
+    let values = accessor_values(
+        &json,
+        &buffers,
+        sampler["output"].as_u64().unwrap() as usize,
+    );
+    let want: Vec<Vec<f64>> = TRANSLATIONS
+        .iter()
+        .map(|t| t.iter().map(|&c| c as f64).collect())
+        .collect();
+    assert_eq!(values, want);
     let (_, _, images) = gltf::import(&path).expect("gltf crate reads it and decodes the PNG");
     assert_eq!((images[0].width, images[0].height), (2, 2));
     check_round_trip(&path, &lod);
