@@ -864,7 +864,11 @@ impl Builder {
             })
             .collect();
 
-        let mut used: Vec<String> = vec!["MSFT_lod".into()];
+        // Some node carries MSFT_lod exactly when some chain has 2+ levels.
+        let mut used: Vec<String> = Vec::new();
+        if levels > 1 {
+            used.push("MSFT_lod".into());
+        }
         let mut required: Vec<String> = Vec::new();
         if self.opts.quantize {
             used.push("KHR_mesh_quantization".into());

@@ -688,3 +688,22 @@ fn inspect_reports_levels_and_coverage() {
     assert!(lodgen::inspect::inspect(&dir.join("bad.gltf")).is_err());
     assert!(lodgen::inspect::inspect(&dir.join("missing.glb")).is_err());
 }
+
+#[test]
+fn single_level_chain_has_no_msft_lod() {
+    let (scene, prim) = sphere_scene(1);
+    let lod = chain("ball", 0, prim, &[]);
+    let dir = scratch("single");
+    let path = dir.join("one.glb");
+    let summary = write_lods(&path, &scene, &[lod], &WriteOptions::default()).unwrap();
+    publish("single_level", &summary);
+    let (json, _) = load_raw(&path);
+    assert!(
+        json.get("extensionsUsed").is_none(),
+        "{}",
+        json["extensionsUsed"]
+    );
+    assert!(json["nodes"][0].get("extensions").is_none());
+    assert_eq!(json["nodes"].as_array().unwrap().len(), 1);
+    gltf::import(&path).unwrap();
+}
