@@ -105,12 +105,12 @@ mod tests {
     #[test]
     fn hand_computed_three_levels() {
         // N = 1920*1080 = 2 073 600; 4N = 8 294 400.
-        // s0 = pi / (8 294 400 * 1e-6) = pi / 8.2944 = 0.378 762...
-        // s1 = pi / (8 294 400 * 1e-4) = pi / 829.44 = 0.003 787 62...
-        // s2 = pi / 8 294 400 (cull) = 3.787 62e-7
+        // s0 = pi / (8 294 400 * 1e-6) = pi / 8.2944 = 0.378 760 688 4
+        // s1 = pi / (8 294 400 * 1e-4) = pi / 829.44 = 0.003 787 606 9
+        // s2 = pi / 8 294 400 (cull) = 3.787 606 9e-7
         let s = screen_coverages(&[0.0, 0.001, 0.01]);
         assert_eq!(s.len(), 3);
-        assert!(close(s[0], 0.378_762_628_2), "{}", s[0]);
+        assert!(close(s[0], 0.378_760_688_366_8), "{}", s[0]);
         assert!(close(s[0], std::f64::consts::PI / 8.2944));
         assert!(close(s[1], std::f64::consts::PI / 829.44));
         assert!(close(s[2], std::f64::consts::PI / 8_294_400.0));

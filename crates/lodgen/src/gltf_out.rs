@@ -19,10 +19,12 @@
 //! - `Origin::Gltf`: the input's nodes, hierarchy, transforms, cameras,
 //!   materials, textures, samplers and images are kept (images stored in buffer
 //!   views are copied, external image files are embedded); the node that
-//!   referenced mesh `m` gets level 0 of `m`'s chain. Animations and skins are
-//!   not carried over (their accessors would point at replaced data), and
-//!   `skin`/`weights` are removed from LOD nodes since the new meshes have no
-//!   joints or morph targets.
+//!   referenced mesh `m` gets level 0 of `m`'s chain. Animations of node
+//!   transforms are kept (keyframes copied into the non-LOD range; they drive
+//!   the node they target, so in unquantized output the coarser LOD nodes do
+//!   not follow them); `weights` channels, skins and the LOD nodes'
+//!   `skin`/`weights` are dropped since the new meshes have no joints or morph
+//!   targets.
 //! - With `quantize`, positions are normalized `i16` in a cube around the
 //!   chain's bounding box; the dequantization (translation + uniform scale) is
 //!   the transform of the LOD nodes. For glTF input the LOD nodes are then new
@@ -862,7 +864,11 @@ impl Builder {
             })
             .collect();
 
-        let mut used: Vec<String> = vec!["MSFT_lod".into()];
+        // Some node carries MSFT_lod exactly when some chain has 2+ levels.
+        let mut used: Vec<String> = Vec::new();
+        if levels > 1 {
+            used.push("MSFT_lod".into());
+        }
         let mut required: Vec<String> = Vec::new();
         if self.opts.quantize {
             used.push("KHR_mesh_quantization".into());
@@ -1128,15 +1134,48 @@ fn gltf_document(
         Value::Object(m) => m,
         _ => return Err(input_err("/".into(), "not a JSON object".into())),
     };
-    for key in [
-        "accessors",
-        "bufferViews",
-        "buffers",
-        "meshes",
-        "animations",
-        "skins",
-    ] {
+    let in_accessors = take_array(&mut root, "accessors");
+    let in_buffer_views = take_array(&mut root, "bufferViews");
+    for key in ["buffers", "meshes", "skins"] {
         root.remove(key);
+    }
+    // Animations of node transforms are kept with their keyframe data copied
+    // into the non-LOD range; `weights` channels (the new meshes have no
+    // morph targets) and animations whose data cannot be copied as a plain
+    // dense accessor (sparse, missing) are dropped.
+    let mut animations = take_array(&mut root, "animations");
+    animations.retain_mut(|animation| {
+        if let Some(Value::Array(channels)) = animation.get_mut("channels") {
+            channels.retain(|c| {
+                c.pointer("/target/path").and_then(Value::as_str) != Some("weights")
+                    && c.pointer("/target/node").is_some()
+            });
+        }
+        let has_channels = animation
+            .get("channels")
+            .and_then(Value::as_array)
+            .is_some_and(|c| !c.is_empty());
+        let Some(Value::Array(samplers)) = animation.get_mut("samplers") else {
+            return false;
+        };
+        has_channels
+            && samplers.iter_mut().all(|sampler| {
+                ["input", "output"].iter().all(|key| {
+                    let copied = sampler.get(*key).and_then(Value::as_u64).and_then(|a| {
+                        copy_accessor(a as usize, &in_accessors, &in_buffer_views, buffers, out)
+                    });
+                    match copied {
+                        Some(new) => {
+                            sampler[*key] = new.into();
+                            true
+                        }
+                        None => false,
+                    }
+                })
+            })
+    });
+    if !animations.is_empty() {
+        root.insert("animations".into(), animations.into());
     }
     for key in ["extensionsUsed", "extensionsRequired"] {
         if let Some(Value::Array(list)) = root.get_mut(key) {
@@ -1166,9 +1205,12 @@ fn gltf_document(
                         format!("buffer {} has no data", view.buffer.value()),
                     )
                 })?;
-                let start = view.byte_offset.map_or(0, |o| o.0 as usize);
-                let end = start + view.byte_length.0 as usize;
-                data.get(start..end)
+                let start = view.byte_offset.map_or(0, |o| o.0);
+                let end = start.saturating_add(view.byte_length.0);
+                usize::try_from(start)
+                    .ok()
+                    .zip(usize::try_from(end).ok())
+                    .and_then(|(start, end)| data.get(start..end))
                     .ok_or_else(|| input_err(at.clone(), "bufferView exceeds its buffer".into()))?
                     .to_vec()
             } else if let Some(uri) = obj.get("uri").and_then(Value::as_str) {
@@ -1212,6 +1254,18 @@ fn gltf_document(
         Some(Value::Array(n)) => n,
         _ => Vec::new(),
     };
+    for node in &mut nodes {
+        // Node extensions that point at mesh data (instancing accessors) or
+        // at the input's own LOD chains no longer apply.
+        if let Some(Value::Object(ext)) = node.get_mut("extensions") {
+            ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
+            if ext.is_empty() {
+                if let Some(obj) = node.as_object_mut() {
+                    obj.remove("extensions");
+                }
+            }
+        }
+    }
     let original_count = nodes.len();
     for i in 0..original_count {
         let Some(mesh) = nodes[i].get("mesh").and_then(Value::as_u64) else {
@@ -1270,6 +1324,66 @@ fn gltf_document(
         root.insert("nodes".into(), nodes.into());
     }
     Ok(root)
+}
+
+fn take_array(root: &mut Map<String, Value>, key: &str) -> Vec<Value> {
+    match root.remove(key) {
+        Some(Value::Array(a)) => a,
+        _ => Vec::new(),
+    }
+}
+
+/// Copies input accessor `a` (dense, with a buffer view) tightly packed into
+/// the non-LOD range; returns the new accessor index, `None` when it cannot be
+/// copied that way.
+fn copy_accessor(
+    a: usize,
+    accessors: &[Value],
+    views: &[Value],
+    buffers: &[Vec<u8>],
+    out: &mut Builder,
+) -> Option<usize> {
+    let acc = accessors.get(a)?;
+    if acc.get("sparse").is_some() {
+        return None;
+    }
+    let size = match acc.get("componentType")?.as_u64()? {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        5125 | 5126 => 4,
+        _ => return None,
+    };
+    let comps = match acc.get("type")?.as_str()? {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" => 4,
+        // Matrices of 1- and 2-byte components have padded columns.
+        "MAT4" if size == 4 => 16,
+        _ => return None,
+    };
+    let elem = size * comps;
+    let view = views.get(acc.get("bufferView")?.as_u64()? as usize)?;
+    let data = buffers.get(view.get("buffer")?.as_u64()? as usize)?;
+    let stride = view
+        .get("byteStride")
+        .and_then(Value::as_u64)
+        .map_or(elem, |s| s as usize);
+    let start = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
+    let start =
+        start.checked_add(acc.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize)?;
+    let count = acc.get("count")?.as_u64()? as usize;
+    let mut bytes = Vec::with_capacity(count.checked_mul(elem)?);
+    for i in 0..count {
+        let at = start.checked_add(i.checked_mul(stride)?)?;
+        bytes.extend_from_slice(data.get(at..at.checked_add(elem)?)?);
+    }
+    let (new_view, _) = out.view(SHARED, Payload::Raw(bytes)).ok()?;
+    let mut copy = acc.clone();
+    let obj = copy.as_object_mut()?;
+    obj.remove("byteOffset");
+    obj.insert("bufferView".into(), new_view.into());
+    Some(out.accessor(copy))
 }
 
 fn sniff_mime(bytes: &[u8]) -> Option<&'static str> {
