@@ -6,6 +6,7 @@
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
 //! form in `vsplit`.
 
+use crate::heap::QuadHeap;
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, SimplifyOptions};
 use crate::pairs;
@@ -15,7 +16,6 @@ use glam::DVec3;
 use rayon::prelude::*;
 use smallvec::SmallVec;
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::time::{Duration, Instant};
 
 /// A moved triangle whose new normal is turned more than ≈75.5° from its old
@@ -157,13 +157,13 @@ impl PartialOrd for Entry {
     }
 }
 impl Ord for Entry {
-    /// Reversed (min-heap) total order: cost, then vertex ids. Deterministic
-    /// across runs and platforms.
+    /// Total order: cost, then vertex ids (the heap pops the smallest).
+    /// Deterministic across runs and platforms.
     fn cmp(&self, o: &Self) -> Ordering {
-        o.cost
-            .total_cmp(&self.cost)
-            .then(o.a.cmp(&self.a))
-            .then(o.b.cmp(&self.b))
+        self.cost
+            .total_cmp(&o.cost)
+            .then(self.a.cmp(&o.a))
+            .then(self.b.cmp(&o.b))
     }
 }
 
@@ -194,7 +194,7 @@ pub struct Simplifier {
     alive: Vec<bool>,
     locked: Vec<bool>,
     boundary: Vec<bool>,
-    heap: BinaryHeap<Entry>,
+    heap: QuadHeap<Entry>,
     live_tris: usize,
     log: Vec<Contraction>,
     stats: Stats,
@@ -339,7 +339,7 @@ impl Simplifier {
             alive: vec![true; nv],
             locked,
             boundary,
-            heap: BinaryHeap::new(),
+            heap: QuadHeap::from_vec(Vec::new()),
             live_tris: nt,
             log: Vec::with_capacity(nt / 2),
             stats,
@@ -381,7 +381,7 @@ impl Simplifier {
             .filter(|&&(a, b)| !(s.locked[a as usize] && s.locked[b as usize]))
             .map(|&(a, b)| s.entry(a, b))
             .collect();
-        s.heap = BinaryHeap::from(entries);
+        s.heap = QuadHeap::from_vec(entries);
         stats.time.heap = t2.elapsed();
         s.stats = stats;
         Ok(s)
@@ -469,7 +469,7 @@ impl Simplifier {
         pairs.sort_unstable();
         pairs.dedup();
         let entries: Vec<Entry> = pairs.iter().map(|&(a, b)| self.entry(a, b)).collect();
-        self.heap = BinaryHeap::from(entries);
+        self.heap = QuadHeap::from_vec(entries);
     }
 
     fn entry(&self, a: u32, b: u32) -> Entry {

@@ -23,6 +23,7 @@
 
 pub mod bvh;
 pub mod collapse;
+pub mod heap;
 pub mod levels;
 pub mod measure;
 pub mod mesh;
