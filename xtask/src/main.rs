@@ -1,1 +1,56 @@
-fn main() {}
+//! `cargo xtask <task>`: project automation (alias in `.cargo/config.toml`).
+
+use std::path::PathBuf;
+
+mod bench;
+mod draco;
+mod golden;
+mod test;
+
+const USAGE: &str = "usage: cargo xtask <task> [args]
+
+tasks:
+  test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
+  draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
+  golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
+  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny";
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some((task, rest)) = args.split_first() else {
+        eprintln!("{USAGE}");
+        std::process::exit(2);
+    };
+    match task.as_str() {
+        "test" => test::run(rest),
+        "draco" => draco::run(rest),
+        "golden" => golden::run(rest),
+        "bench" => bench::run(rest),
+        "bench-child" => bench::child(rest),
+        "help" | "-h" | "--help" => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        other => {
+            eprintln!("unknown task `{other}`\n{USAGE}");
+            std::process::exit(2);
+        }
+    }
+}
+
+/// The workspace root (the parent of `xtask/`).
+pub fn workspace_root() -> PathBuf {
+    let xtask = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    xtask.parent().map(PathBuf::from).unwrap_or(xtask)
+}
+
+/// `../shared/assets` beside the workspace, or `$LODGEN_ASSETS`.
+pub fn shared_assets() -> anyhow::Result<PathBuf> {
+    let dir = lodgen::assets::shared_assets_dir();
+    anyhow::ensure!(
+        dir.join("bunny.obj").exists(),
+        "test meshes not found in {} (set LODGEN_ASSETS to the folder holding bunny.obj)",
+        dir.display()
+    );
+    Ok(dir)
+}

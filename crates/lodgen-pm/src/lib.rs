@@ -21,8 +21,10 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
+pub mod bvh;
 pub mod collapse;
 pub mod levels;
+pub mod measure;
 pub mod mesh;
 pub mod options;
 pub mod pairs;
@@ -34,7 +36,7 @@ pub mod vsplit;
 pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
-pub use options::{Boundary, Placement, SimplifyOptions, Tau};
+pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
 pub use vsplit::{Corner, Cursor, ProgressiveMesh, VertexSplit};
 
 /// A simplification's result: the progressive mesh (numbered as in

@@ -1,6 +1,13 @@
 //! lodgen: mesh readers, the LOD builder, the glTF `MSFT_lod` writer and the
 //! `lodgen` command, on top of the `lodgen-pm` core.
 
+pub mod assets;
+pub mod cli;
+pub mod coverage;
+pub mod gltf_out;
+pub mod inspect;
+pub mod io;
+pub mod lod;
 pub mod progressive;
 pub mod scene;
 pub mod view;

@@ -1,0 +1,557 @@
+//! The command line's building blocks, in the library so tests and the
+//! xtask drive exactly what users run: argument types (clap), level-list
+//! parsing, the build job (read → LODs → write → table / JSON report) and
+//! `measure`.
+//!
+//! Owns user-facing text (tables, progress, error context). The algorithms
+//! are in `lod` and the core; formats in `io` and `gltf_out`.
+
+use crate::gltf_out::{self, Compression, WriteOptions};
+use crate::io;
+use crate::lod::{self, BuildOptions, LevelRequest, MeshBuild, Progress};
+use crate::scene::{Origin, Scene};
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use lodgen_pm::levels::LevelSpec;
+use lodgen_pm::measure::{self, MeasureOptions, MeshRef};
+use lodgen_pm::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of the main job (`lodgen INPUT ...`).
+#[derive(Args, Debug, Clone)]
+pub struct BuildArgs {
+    /// Input mesh: .obj, .ply (ascii or binary), .smf, .gltf or .glb.
+    pub input: Option<PathBuf>,
+
+    /// Output file, .glb or .gltf (.gltf writes one .bin per level beside
+    /// it). Default: the input's name with .glb, beside the input
+    /// (INPUT.lod.glb when the input is itself a .glb).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+
+    /// Levels to build, finest first or in any order, comma-separated:
+    /// ratios of the input's triangles ("50%", or a fraction like 0.5) or
+    /// absolute triangle counts ("20000"). All levels come from one
+    /// simplification pass.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "50%,10%,2%",
+        conflicts_with = "max_error"
+    )]
+    pub levels: String,
+
+    /// Build levels by measured error instead: for each bound (in % of the
+    /// bounding-box diagonal, e.g. "0.1%,0.5%,2%") the coarsest level whose
+    /// measured symmetric Hausdorff distance stays within it.
+    #[arg(long, value_name = "LIST")]
+    pub max_error: Option<String>,
+
+    /// Pair threshold τ: vertices closer than this may merge even without
+    /// an edge (joins separate parts). In mesh units ("0.01") or in % of the
+    /// bounding-box diagonal ("0.5%"). 0 = edge collapses only.
+    #[arg(long, value_name = "DIST", default_value = "0")]
+    pub tau: String,
+
+    /// How open borders are kept: "weighted" adds constraint planes (border
+    /// vertices may merge along the border), "locked" never touches them.
+    #[arg(long, value_enum, default_value_t = BoundaryMode::Weighted)]
+    pub boundary: BoundaryMode,
+
+    /// Weight of the border constraint planes relative to the face planes
+    /// (with --boundary weighted; scaled by edge length²).
+    #[arg(long, value_name = "W", default_value_t = DEFAULT_BOUNDARY_WEIGHT)]
+    pub boundary_weight: f64,
+
+    /// Where a merged pair's vertex goes: "optimal" solves the quadric,
+    /// "half-edge" keeps one of the two (every level then reuses input
+    /// positions).
+    #[arg(long, value_enum, default_value_t = PlacementMode::Optimal)]
+    pub placement: PlacementMode,
+
+    /// Weight every face plane equally instead of by triangle area.
+    #[arg(long)]
+    pub uniform_weights: bool,
+
+    /// Write quantized vertex data (KHR_mesh_quantization): 16-bit
+    /// positions, 8-bit normals, 16-bit UVs.
+    #[arg(long)]
+    pub quantize: bool,
+
+    /// Geometry compression: "none", or "meshopt" (EXT_meshopt_compression,
+    /// with an uncompressed fallback buffer).
+    #[arg(long, value_enum, default_value_t = CompressMode::None)]
+    pub compress: CompressMode,
+
+    /// Also write the table as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+
+    /// Area samples per triangle for the error measurement (plus every
+    /// vertex).
+    #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
+    pub samples: f64,
+
+    /// No table, no progress bar; errors only.
+    #[arg(short, long)]
+    pub quiet: bool,
+
+    /// Also print simplification statistics: collapses, rejections by
+    /// reason, time per phase.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundaryMode {
+    Weighted,
+    Locked,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlacementMode {
+    Optimal,
+    HalfEdge,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompressMode {
+    None,
+    Meshopt,
+}
+
+/// Parse `--levels`: "50%", "0.5" (ratios) or "20000" (triangle counts).
+pub fn parse_levels(list: &str) -> Result<Vec<LevelSpec>> {
+    let mut out = Vec::new();
+    for item in list.split(',').map(str::trim) {
+        if item.is_empty() {
+            bail!("--levels {list:?}: empty entry");
+        }
+        let spec = if let Some(p) = item.strip_suffix('%') {
+            let v: f64 = p
+                .trim()
+                .parse()
+                .with_context(|| format!("--levels: {item:?} is not a percentage"))?;
+            if !(v > 0.0 && v <= 100.0) {
+                bail!("--levels: {item:?} must be in (0%, 100%]");
+            }
+            LevelSpec::Ratio(v / 100.0)
+        } else if let Ok(n) = item.parse::<usize>() {
+            if n == 0 {
+                bail!("--levels: a level needs at least one triangle");
+            }
+            LevelSpec::Triangles(n)
+        } else {
+            let v: f64 = item.parse().with_context(|| {
+                format!(
+                    "--levels: {item:?} is neither a percentage, a fraction nor a triangle count"
+                )
+            })?;
+            if !(v > 0.0 && v <= 1.0) {
+                bail!("--levels: the fraction {item:?} must be in (0, 1]");
+            }
+            LevelSpec::Ratio(v)
+        };
+        out.push(spec);
+    }
+    Ok(out)
+}
+
+/// Parse `--max-error`: percentages of the bounding-box diagonal, returned
+/// as fractions.
+pub fn parse_max_errors(list: &str) -> Result<Vec<f64>> {
+    list.split(',')
+        .map(str::trim)
+        .map(|item| {
+            let p = item.strip_suffix('%').with_context(|| {
+                format!("--max-error: {item:?} must be a percentage of the bounding-box diagonal, e.g. 0.5%")
+            })?;
+            let v: f64 = p
+                .trim()
+                .parse()
+                .with_context(|| format!("--max-error: {item:?} is not a number"))?;
+            if !(v >= 0.0 && v.is_finite()) {
+                bail!("--max-error: {item:?} must be a finite, non-negative percentage");
+            }
+            Ok(v / 100.0)
+        })
+        .collect()
+}
+
+/// Parse `--tau`: mesh units, or "%" of the bounding-box diagonal.
+pub fn parse_tau(s: &str) -> Result<Tau> {
+    let s = s.trim();
+    let (v, pct) = match s.strip_suffix('%') {
+        Some(p) => (p.trim(), true),
+        None => (s, false),
+    };
+    let v: f64 = v
+        .parse()
+        .with_context(|| format!("--tau: {s:?} is not a distance"))?;
+    if !(v >= 0.0 && v.is_finite()) {
+        bail!("--tau: {s:?} must be finite and non-negative");
+    }
+    Ok(if pct {
+        Tau::DiagonalFraction(v / 100.0)
+    } else {
+        Tau::Absolute(v)
+    })
+}
+
+impl BuildArgs {
+    /// The library options these arguments mean.
+    pub fn build_options(&self) -> Result<BuildOptions> {
+        let levels = match &self.max_error {
+            Some(list) => LevelRequest::MaxErrors(parse_max_errors(list)?),
+            None => LevelRequest::Specs(parse_levels(&self.levels)?),
+        };
+        if !(self.boundary_weight >= 0.0 && self.boundary_weight.is_finite()) {
+            bail!("--boundary-weight must be finite and non-negative");
+        }
+        if !(self.samples > 0.0 && self.samples.is_finite()) {
+            bail!("--samples must be positive");
+        }
+        let simplify = SimplifyOptions::DEFAULT
+            .with_tau(parse_tau(&self.tau)?)
+            .with_area_weighted(!self.uniform_weights)
+            .with_boundary(match self.boundary {
+                BoundaryMode::Weighted => Boundary::Weighted(self.boundary_weight),
+                BoundaryMode::Locked => Boundary::Locked,
+            })
+            .with_placement(match self.placement {
+                PlacementMode::Optimal => Placement::Optimal,
+                PlacementMode::HalfEdge => Placement::HalfEdge,
+            });
+        Ok(BuildOptions {
+            levels,
+            simplify,
+            measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
+        })
+    }
+
+    pub fn write_options(&self) -> WriteOptions {
+        WriteOptions {
+            quantize: self.quantize,
+            compression: match self.compress {
+                CompressMode::None => Compression::None,
+                CompressMode::Meshopt => Compression::Meshopt,
+            },
+        }
+    }
+}
+
+/// The default output path for `input`.
+pub fn default_output(input: &Path) -> PathBuf {
+    let stem = input.file_stem().map_or_else(
+        || std::ffi::OsString::from("out"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut name = stem.clone();
+    name.push(".glb");
+    let candidate = input.with_file_name(&name);
+    if candidate == input {
+        let mut name = stem;
+        name.push(".lod.glb");
+        input.with_file_name(name)
+    } else {
+        candidate
+    }
+}
+
+/// The main job. Prints the table (unless quiet) and writes the report.
+pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> {
+    let opts = args.build_options()?;
+    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    if output == input {
+        bail!("the output {} would overwrite the input", output.display());
+    }
+    let t0 = Instant::now();
+    let scene = io::read_scene(input).with_context(|| format!("reading {}", input.display()))?;
+    let bar = show_progress.then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    let mut on_progress = |p: Progress| {
+        if let Some(b) = &bar {
+            b.set_message(match p {
+                Progress::Simplifying { mesh, of } => format!("simplifying mesh {}/{of}", mesh + 1),
+                Progress::Measuring { mesh, level, of } => {
+                    format!("mesh {}: measuring level {}/{of}", mesh + 1, level + 1)
+                }
+            });
+        }
+    };
+    let builds = lod::build_lods(&scene, &opts, &mut on_progress)
+        .with_context(|| format!("simplifying {}", input.display()))?;
+    if let Some(b) = &bar {
+        b.set_message(format!("writing {}", output.display()));
+    }
+    let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
+    let summary = gltf_out::write_lods(&output, &scene, &lods, &args.write_options())
+        .with_context(|| format!("writing {}", output.display()))?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let elapsed = t0.elapsed();
+    let level_bytes: Vec<Vec<u64>> = summary
+        .meshes
+        .iter()
+        .map(|m| m.level_bytes.clone())
+        .collect();
+    if !args.quiet {
+        print!("{}", table(&builds, &level_bytes));
+        if args.verbose {
+            for b in &builds {
+                eprintln!("{}: {:#?}", b.lod.name, b.simplified.stats);
+                eprintln!(
+                    "{}: stopped: {:?}; prepare: {:?}",
+                    b.lod.name, b.simplified.stop, b.simplified.prepare
+                );
+            }
+        }
+        println!(
+            "wrote {} in {:.2} s",
+            output.display(),
+            elapsed.as_secs_f64()
+        );
+    }
+    if let Some(path) = &args.report {
+        let json = report_json(input, &output, &scene, &builds, &level_bytes);
+        write_atomically(path, serde_json::to_string_pretty(&json)?.as_bytes())
+            .with_context(|| format!("writing the report {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The per-mesh table printed on stdout.
+pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
+    let mut s = String::new();
+    for (i, b) in builds.iter().enumerate() {
+        let st = &b.simplified;
+        s += &format!(
+            "{} ({} triangles, {} vertices after welding)\n",
+            if b.lod.name.is_empty() {
+                format!("mesh {i}")
+            } else {
+                b.lod.name.clone()
+            },
+            st.stats.input_triangles,
+            st.stats.input_vertices
+        );
+        s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
+        for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
+            let verts: usize = l.primitives.iter().map(|p| p.positions.len()).sum();
+            s += &format!(
+                "  {k:>5}  {:>9}  {:>8}  {:>11.4}  {:>8.4}  {:>10.3e}  {:>8}\n",
+                l.triangle_count(),
+                verts,
+                e.hausdorff_percent(),
+                e.rms_percent(),
+                l.screen_coverage,
+                bytes.get(i).and_then(|b| b.get(k)).copied().unwrap_or(0),
+            );
+        }
+    }
+    s
+}
+
+fn report_json(
+    input: &Path,
+    output: &Path,
+    scene: &Scene,
+    builds: &[MeshBuild],
+    bytes: &[Vec<u64>],
+) -> serde_json::Value {
+    json!({
+        "input": input.display().to_string(),
+        "output": output.display().to_string(),
+        "meshes": builds.iter().enumerate().map(|(i, b)| json!({
+            "name": b.lod.name,
+            "source_mesh": b.lod.source,
+            "input_triangles": scene.meshes[b.lod.source].primitives.iter().map(|p| p.triangle_count()).sum::<usize>(),
+            "welded_triangles": b.simplified.stats.input_triangles,
+            "stop": format!("{:?}", b.simplified.stop),
+            "levels": b.lod.levels.iter().zip(&b.errors).zip(&b.level_splits).enumerate().map(|(k, ((l, e), s))| json!({
+                "triangles": l.triangle_count(),
+                "vertices": l.primitives.iter().map(|p| p.positions.len()).sum::<usize>(),
+                "splits": s,
+                "hausdorff_percent": e.hausdorff_percent(),
+                "rms_percent": e.rms_percent(),
+                "mean_percent": e.mean_percent(),
+                "original_to_level_percent": e.percent(e.a_to_b.max),
+                "level_to_original_percent": e.percent(e.b_to_a.max),
+                "screen_coverage": l.screen_coverage,
+                "bytes": bytes.get(i).and_then(|b| b.get(k)).copied().unwrap_or(0),
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Write `bytes` to a temporary file beside `path`, then rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
+}
+
+/// Every mesh the file's default scene draws (for glTF: the meshes on nodes
+/// reachable from the scene, so coarser MSFT_lod levels are left out), merged
+/// into one triangle list. Node transforms are not applied.
+pub fn merged_mesh(scene: &Scene) -> lodgen_pm::Mesh {
+    let meshes: Vec<usize> = match &scene.origin {
+        Origin::Gltf { document, .. } => {
+            let mut out = Vec::new();
+            let scene_index = document.scene.map_or(0, |s| s.value());
+            let mut stack: Vec<usize> = document
+                .scenes
+                .get(scene_index)
+                .map(|s| s.nodes.iter().map(|n| n.value()).collect())
+                .unwrap_or_default();
+            while let Some(n) = stack.pop() {
+                if let Some(node) = document.nodes.get(n) {
+                    if let Some(m) = node.mesh {
+                        out.push(m.value());
+                    }
+                    stack.extend(node.children.iter().flatten().map(|c| c.value()));
+                }
+            }
+            out.sort_unstable();
+            out.dedup();
+            out
+        }
+        Origin::Flat => (0..scene.meshes.len()).collect(),
+    };
+    let mut m = lodgen_pm::Mesh::default();
+    for p in meshes
+        .iter()
+        .filter_map(|&i| scene.meshes.get(i))
+        .flat_map(|m| &m.primitives)
+    {
+        let off = m.positions.len() as u32;
+        m.positions.extend_from_slice(&p.positions);
+        m.triangles.extend(
+            p.indices
+                .chunks_exact(3)
+                .map(|c| [c[0] + off, c[1] + off, c[2] + off]),
+        );
+    }
+    m
+}
+
+/// `lodgen measure A B`.
+pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<()> {
+    if !(samples > 0.0 && samples.is_finite()) {
+        bail!("--samples must be positive");
+    }
+    let read = |p: &Path| -> Result<lodgen_pm::Mesh> {
+        let scene = io::read_scene(p).with_context(|| format!("reading {}", p.display()))?;
+        Ok(merged_mesh(&scene))
+    };
+    let (ma, mb) = (read(a)?, read(b)?);
+    let r = measure::measure(
+        MeshRef::new(&ma.positions, &ma.triangles),
+        MeshRef::new(&mb.positions, &mb.triangles),
+        &MeasureOptions::DEFAULT.with_samples_per_triangle(samples),
+    )
+    .context("measuring")?;
+    if as_json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({
+                "a": a.display().to_string(), "b": b.display().to_string(),
+                "diagonal": r.diagonal,
+                "a_to_b": {"hausdorff": r.a_to_b.max, "mean": r.a_to_b.mean, "rms": r.a_to_b.rms, "samples": r.a_to_b.samples},
+                "b_to_a": {"hausdorff": r.b_to_a.max, "mean": r.b_to_a.mean, "rms": r.b_to_a.rms, "samples": r.b_to_a.samples},
+                "hausdorff_percent": r.hausdorff_percent(), "rms_percent": r.rms_percent(), "mean_percent": r.mean_percent(),
+            }))?
+        );
+    } else {
+        println!(
+            "A = {} ({} triangles), B = {} ({} triangles)",
+            a.display(),
+            ma.triangles.len(),
+            b.display(),
+            mb.triangles.len()
+        );
+        println!("bounding-box diagonal of A: {:.6}", r.diagonal);
+        println!("direction   hausdorff (% diag)       mean (% diag)            rms (% diag)");
+        for (name, d) in [("A -> B", r.a_to_b), ("B -> A", r.b_to_a)] {
+            println!(
+                "{name:<10}  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)",
+                d.max,
+                r.percent(d.max),
+                d.mean,
+                r.percent(d.mean),
+                d.rms,
+                r.percent(d.rms)
+            );
+        }
+        println!(
+            "symmetric   {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)",
+            r.hausdorff(),
+            r.hausdorff_percent(),
+            r.mean(),
+            r.mean_percent(),
+            r.rms(),
+            r.rms_percent()
+        );
+    }
+    Ok(())
+}
+
+/// FNV-1a, 64 bit: a small, stable hash for golden summaries.
+fn fnv1a(hash: &mut u64, bytes: &[u8]) {
+    for &b in bytes {
+        *hash ^= u64::from(b);
+        *hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+}
+
+/// The golden summary of LOD builds (`assets/golden/*.txt`): per level the
+/// triangle and vertex counts, measured errors, and a hash of the index data
+/// and of the positions quantized to 2⁻¹⁶ of the bounding-box diagonal.
+pub fn golden_summary(title: &str, builds: &[MeshBuild]) -> String {
+    let mut s = format!(
+        "# lodgen golden summary: {title}\n# regenerate with `cargo xtask golden` and commit\n"
+    );
+    for b in builds {
+        let full = b.simplified.pm.mesh_at_splits(b.simplified.pm.len());
+        let (lo, _) = full.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+        let diag = full.diagonal().max(f64::MIN_POSITIVE);
+        s += &format!(
+            "mesh {:?} welded_triangles {} welded_vertices {}\n",
+            b.lod.name, b.simplified.stats.input_triangles, b.simplified.stats.input_vertices
+        );
+        for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
+            let mut h = 0xcbf2_9ce4_8422_2325u64;
+            for p in &l.primitives {
+                for i in &p.indices {
+                    fnv1a(&mut h, &i.to_le_bytes());
+                }
+                for v in &p.positions {
+                    for c in 0..3 {
+                        let q =
+                            ((f64::from(v[c]) - f64::from(lo[c])) / diag * 65536.0).round() as i64;
+                        fnv1a(&mut h, &q.to_le_bytes());
+                    }
+                }
+            }
+            s += &format!(
+                "level {k} triangles {} vertices {} hausdorff_percent {:.6} rms_percent {:.6} hash {h:016x}\n",
+                l.triangle_count(),
+                l.primitives.iter().map(|p| p.positions.len()).sum::<usize>(),
+                e.hausdorff_percent(),
+                e.rms_percent(),
+            );
+        }
+    }
+    s
+}

@@ -1,0 +1,315 @@
+//! The `lodgen` binary as users run it: outputs, tables, reports, errors,
+//! determinism. Every glTF written here is also copied to `$LODGEN_TEST_OUT`
+//! (when set) for the glTF-Validator and Babylon.js checks of `cargo xtask
+//! test`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lodgen(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodgen"))
+        .args(args)
+        .output()
+        .expect("the lodgen binary runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Copy outputs for the validator / Babylon checks.
+fn publish(files: &[&Path]) {
+    if let Some(dir) = std::env::var_os("LODGEN_TEST_OUT") {
+        let dir = PathBuf::from(dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for f in files {
+            std::fs::copy(f, dir.join(f.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
+fn write_torus_obj(path: &Path) {
+    let m = lodgen_pm::shapes::torus(1.0, 0.35, 48, 24);
+    let mut s = String::from("o torus\n");
+    for p in &m.positions {
+        s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    for t in &m.triangles {
+        s += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn report(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+#[test]
+fn builds_three_levels_with_a_table_and_a_report() {
+    let d = tmp("three");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "--levels",
+        "50%,10%,2%",
+        "--report",
+        d.join("torus.report.json").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.join("torus.glb");
+    assert!(out.exists(), "default output beside the input");
+    let table = stdout(&o);
+    assert!(table.contains("hausdorff %"), "{table}");
+    let r = report(&d.join("torus.report.json"));
+    let levels = r["meshes"][0]["levels"].as_array().unwrap();
+    let tris: Vec<u64> = levels
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect();
+    assert_eq!(tris, vec![1152, 230, 46]);
+    let h: Vec<f64> = levels
+        .iter()
+        .map(|l| l["hausdorff_percent"].as_f64().unwrap())
+        .collect();
+    assert!(h[0] <= h[1] && h[1] <= h[2] && h[2] > 0.0, "{h:?}");
+    publish(&[&out, &d.join("torus.report.json")]);
+}
+
+#[test]
+fn output_is_byte_identical_across_runs() {
+    let d = tmp("determinism");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let mut outs = Vec::new();
+    for name in ["a.glb", "b.glb"] {
+        let out = d.join(name);
+        let o = lodgen(&[input.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stdout(&o).is_empty(), "--quiet prints nothing");
+        outs.push(std::fs::read(out).unwrap());
+    }
+    assert_eq!(outs[0], outs[1]);
+}
+
+#[test]
+fn gltf_output_writes_one_bin_per_level() {
+    let d = tmp("gltf");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let out = d.join("torus.gltf");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--levels",
+        "40%,5%",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bins: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "bin"))
+        .collect();
+    assert_eq!(bins.len(), 2, "one .bin per level");
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    assert_eq!(doc.meshes().count(), 2);
+    assert_eq!(buffers.len(), 2);
+    if let Some(dir) = std::env::var_os("LODGEN_TEST_OUT") {
+        let dir = PathBuf::from(dir).join("cli-gltf");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::copy(&out, dir.join("torus.gltf")).unwrap();
+        for b in &bins {
+            std::fs::copy(b.path(), dir.join(b.file_name())).unwrap();
+        }
+    }
+}
+
+#[test]
+fn bad_input_names_file_and_line_and_writes_nothing() {
+    let d = tmp("bad");
+    let input = d.join("bad.obj");
+    std::fs::write(&input, "v 0 0 0\nv 1 0 0\nf 0 1 2\n").unwrap();
+    let out = d.join("bad.glb");
+    let o = lodgen(&[input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("bad.obj:3"), "{err}");
+    assert!(err.starts_with("error: reading"), "{err}");
+    assert!(!out.exists());
+    assert_eq!(
+        std::fs::read_dir(&d).unwrap().count(),
+        1,
+        "no temporary files left"
+    );
+
+    let o = lodgen(&[d.join("missing.obj").to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("missing.obj"));
+
+    let good = d.join("t.obj");
+    write_torus_obj(&good);
+    let o = lodgen(&[
+        good.to_str().unwrap(),
+        "-o",
+        d.join("no/such/dir/t.glb").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("writing"), "{}", stderr(&o));
+
+    for (flag, value) in [
+        ("--levels", "50%,abc"),
+        ("--levels", "150%"),
+        ("--max-error", "0.5"),
+        ("--tau", "-1"),
+    ] {
+        let o = lodgen(&[good.to_str().unwrap(), &format!("{flag}={value}")]);
+        assert!(!o.status.success(), "{flag} {value} accepted");
+        assert!(stderr(&o).contains(flag), "{flag} {value}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn help_explains_every_flag() {
+    let o = lodgen(&["--help"]);
+    assert!(o.status.success());
+    let h = stdout(&o);
+    for flag in [
+        "--output",
+        "--levels",
+        "--max-error",
+        "--tau",
+        "--boundary",
+        "--boundary-weight",
+        "--placement",
+        "--uniform-weights",
+        "--quantize",
+        "--compress",
+        "--report",
+        "--samples",
+        "--quiet",
+        "--verbose",
+        "inspect",
+        "measure",
+    ] {
+        assert!(h.contains(flag), "--help lacks {flag}");
+    }
+    assert!(h.contains("[default: 50%,10%,2%]"));
+}
+
+#[test]
+fn max_error_levels_stay_within_their_bounds() {
+    let d = tmp("maxerr");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let rep = d.join("r.json");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "--max-error",
+        "0.2%,1%,4%",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&rep);
+    let levels = r["meshes"][0]["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    for (l, bound) in levels.iter().zip([0.2, 1.0, 4.0]) {
+        // searched with lighter sampling; the final measurement may find a
+        // slightly larger maximum
+        assert!(
+            l["hausdorff_percent"].as_f64().unwrap() <= bound * 1.25,
+            "{l}"
+        );
+    }
+    let tris: Vec<u64> = levels
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect();
+    assert!(tris[0] > tris[1] && tris[1] > tris[2], "{tris:?}");
+}
+
+#[test]
+fn inspect_and_measure_report_on_outputs() {
+    let d = tmp("inspect");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let out = d.join("torus.glb");
+    assert!(lodgen(&[input.to_str().unwrap(), "-q"]).status.success());
+    let o = lodgen(&["inspect", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for n in ["1152", "230", "46"] {
+        assert!(text.contains(n), "inspect lacks {n}: {text}");
+    }
+    let o = lodgen(&["measure", input.to_str().unwrap(), input.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("symmetric"));
+    let o = lodgen(&[
+        "measure",
+        "--json",
+        input.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // the finest level (50%) is what the scene draws
+    assert!(v["hausdorff_percent"].as_f64().unwrap() > 0.0);
+}
+
+/// The bunny and cow LOD sets, as a pipeline would make them; the bunny's
+/// is what the Babylon.js check loads.
+#[test]
+fn bunny_and_cow_lod_sets() {
+    for name in ["bunny", "cow"] {
+        let Some(input) = lodgen::assets::shared_asset(&format!("{name}.obj")) else {
+            return;
+        };
+        let d = tmp(name);
+        let out = d.join(format!("{name}.glb"));
+        let rep = d.join(format!("{name}.report.json"));
+        let o = lodgen(&[
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--levels",
+            "50%,10%,2%",
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = report(&rep);
+        let levels = r["meshes"][0]["levels"].as_array().unwrap();
+        assert_eq!(levels.len(), 3);
+        // round trip through the gltf crate: same per-level triangle counts
+        let (doc, _, _) = gltf::import(&out).unwrap();
+        let mut counts: Vec<u64> = doc
+            .meshes()
+            .map(|m| {
+                m.primitives()
+                    .map(|p| p.indices().unwrap().count() as u64 / 3)
+                    .sum()
+            })
+            .collect();
+        counts.sort_unstable_by(|a, b| b.cmp(a));
+        let expected: Vec<u64> = levels
+            .iter()
+            .map(|l| l["triangles"].as_u64().unwrap())
+            .collect();
+        assert_eq!(counts, expected);
+        publish(&[&out, &rep]);
+    }
+}

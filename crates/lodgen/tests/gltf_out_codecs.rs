@@ -1,0 +1,245 @@
+//! `--quantize` (KHR_mesh_quantization) and `--compress meshopt`
+//! (EXT_meshopt_compression): decoded data must equal the plain output's
+//! within quantization error, vertex streams must use codec version 0.
+
+#[path = "gltf_out_common/mod.rs"]
+mod common;
+
+use common::*;
+use lodgen::gltf_out::{write_lods, Compression, WriteOptions};
+use lodgen::scene::{Material, Origin, Primitive, Scene, SourceMesh};
+use serde_json::Value;
+
+fn textured_scene() -> (Scene, lodgen::scene::LodMesh) {
+    let center = [10.0, 0.0, -4.0];
+    let (positions, indices) = icosphere(3, 3.0, center);
+    let uv = sphere_uvs(&positions, center);
+    let prim = Primitive {
+        material: Some(0),
+        positions,
+        normals: None,
+        texcoords: Some(uv),
+        indices,
+    };
+    let scene = Scene {
+        meshes: vec![SourceMesh {
+            name: "ball".into(),
+            primitives: vec![prim.clone()],
+        }],
+        materials: vec![Material {
+            name: "m".into(),
+            base_color: Some([0.2, 0.4, 0.6, 1.0]),
+        }],
+        origin: Origin::Flat,
+    };
+    let lod = chain("ball", 0, prim, &[0.5, 0.1]);
+    (scene, lod)
+}
+
+/// Per level (finest first): (node, accessor indices of POSITION, NORMAL,
+/// TEXCOORD_0, indices) of the single chain.
+fn levels(json: &Value) -> Vec<(usize, [usize; 4])> {
+    let nodes = json["nodes"].as_array().unwrap();
+    let head = nodes
+        .iter()
+        .position(|n| n.pointer("/extensions/MSFT_lod").is_some())
+        .unwrap();
+    let ids = nodes[head]["extensions"]["MSFT_lod"]["ids"]
+        .as_array()
+        .unwrap();
+    std::iter::once(head)
+        .chain(ids.iter().map(|v| v.as_u64().unwrap() as usize))
+        .map(|n| {
+            let m = nodes[n]["mesh"].as_u64().unwrap() as usize;
+            let p = &json["meshes"][m]["primitives"][0];
+            let a = |k: &str| p["attributes"][k].as_u64().unwrap() as usize;
+            (
+                n,
+                [
+                    a("POSITION"),
+                    a("NORMAL"),
+                    a("TEXCOORD_0"),
+                    p["indices"].as_u64().unwrap() as usize,
+                ],
+            )
+        })
+        .collect()
+}
+
+fn write(name: &str, opts: WriteOptions) -> (Value, Vec<Vec<u8>>, lodgen::gltf_out::WriteSummary) {
+    let (scene, lod) = textured_scene();
+    let dir = scratch(name);
+    let file = if name.ends_with("gltf") {
+        "ball.gltf"
+    } else {
+        "ball.glb"
+    };
+    let summary = write_lods(&dir.join(file), &scene, &[lod], &opts).unwrap();
+    publish(name, &summary);
+    let (json, buffers) = load_raw(&dir.join(file));
+    (json, buffers, summary)
+}
+
+fn has(json: &Value, key: &str, ext: &str) -> bool {
+    json[key]
+        .as_array()
+        .is_some_and(|a| a.iter().any(|e| e == ext))
+}
+
+#[test]
+fn quantized_data_matches_plain_within_quantization_error() {
+    let (pj, pb, _) = write("q-plain-glb", WriteOptions::default());
+    let (qj, qb, _) = write(
+        "q-glb",
+        WriteOptions {
+            quantize: true,
+            compression: Compression::None,
+        },
+    );
+    assert!(has(&qj, "extensionsUsed", "KHR_mesh_quantization"));
+    assert!(has(&qj, "extensionsRequired", "KHR_mesh_quantization"));
+    assert!(!has(&pj, "extensionsUsed", "KHR_mesh_quantization"));
+    for ((_, pa), (qn, qa)) in levels(&pj).into_iter().zip(levels(&qj)) {
+        let node = &qj["nodes"][qn];
+        let t: Vec<f64> = (0..3)
+            .map(|i| node["translation"][i].as_f64().unwrap())
+            .collect();
+        let s = node["scale"][0].as_f64().unwrap();
+        assert_eq!(
+            node["scale"][1].as_f64().unwrap(),
+            s,
+            "uniform dequantization scale"
+        );
+        let pos = &qj["accessors"][qa[0]];
+        assert_eq!(
+            (pos["componentType"].as_u64(), pos["normalized"].as_bool()),
+            (Some(5122), Some(true))
+        );
+        assert!(pos.get("min").is_some() && pos.get("max").is_some());
+        assert_eq!(qj["accessors"][qa[1]]["componentType"], 5120);
+        assert_eq!(qj["accessors"][qa[2]]["componentType"], 5123);
+
+        let plain = accessor_values(&pj, &pb, pa[0]);
+        let quant = accessor_values(&qj, &qb, qa[0]);
+        assert_eq!(plain.len(), quant.len());
+        let tol = s / 32767.0 * 0.5 + 1e-5;
+        for (p, q) in plain.iter().zip(&quant) {
+            for a in 0..3 {
+                let world = t[a] + s * q[a];
+                assert!((world - p[a]).abs() <= tol, "{world} vs {}", p[a]);
+            }
+        }
+        for (p, q) in accessor_values(&pj, &pb, pa[1])
+            .iter()
+            .zip(accessor_values(&qj, &qb, qa[1]))
+        {
+            for a in 0..3 {
+                assert!((p[a] - q[a]).abs() <= 0.5 / 127.0 + 1e-6);
+            }
+        }
+        for (p, q) in accessor_values(&pj, &pb, pa[2])
+            .iter()
+            .zip(accessor_values(&qj, &qb, qa[2]))
+        {
+            for a in 0..2 {
+                assert!((p[a] - q[a]).abs() <= 0.5 / 65535.0 + 1e-6);
+            }
+        }
+        assert_eq!(
+            accessor_values(&pj, &pb, pa[3]),
+            accessor_values(&qj, &qb, qa[3])
+        );
+    }
+}
+
+/// Every accessor of `compressed` decodes to the same values as in `plain`.
+fn assert_same_decoded(pj: &Value, pb: &[Vec<u8>], cj: &Value, cb: &[Vec<u8>]) {
+    for ((_, pa), (_, ca)) in levels(pj).into_iter().zip(levels(cj)) {
+        for (p, c) in pa[..3].iter().zip(&ca[..3]) {
+            let same = accessor_values(pj, pb, *p) == accessor_values(cj, cb, *c);
+            assert!(
+                same,
+                "accessor {c} decodes differently from plain accessor {p}"
+            );
+        }
+        // The triangle codec may rotate a triangle's corners (keeping its
+        // winding); triangle order and contents are exact.
+        let rotated = |v: Vec<Vec<f64>>| -> Vec<[u64; 3]> {
+            v.chunks_exact(3)
+                .map(|t| {
+                    let t = [t[0][0] as u64, t[1][0] as u64, t[2][0] as u64];
+                    let m = (0..3).min_by_key(|&i| t[i]).unwrap();
+                    [t[m], t[(m + 1) % 3], t[(m + 2) % 3]]
+                })
+                .collect()
+        };
+        let same =
+            rotated(accessor_values(pj, pb, pa[3])) == rotated(accessor_values(cj, cb, ca[3]));
+        assert!(same, "triangles of accessor {} differ", ca[3]);
+    }
+}
+
+fn check_meshopt_structure(json: &Value) {
+    assert!(has(json, "extensionsUsed", "EXT_meshopt_compression"));
+    assert!(has(json, "extensionsRequired", "EXT_meshopt_compression"));
+    let buffers = json["buffers"].as_array().unwrap();
+    let mut compressed_views = 0;
+    for bv in json["bufferViews"].as_array().unwrap() {
+        if let Some(m) = bv.pointer("/extensions/EXT_meshopt_compression") {
+            compressed_views += 1;
+            let fallback = &buffers[bv["buffer"].as_u64().unwrap() as usize];
+            assert_eq!(
+                fallback["extensions"]["EXT_meshopt_compression"]["fallback"],
+                true
+            );
+            assert!(fallback.get("uri").is_none());
+            assert_eq!(
+                bv["byteLength"].as_u64().unwrap(),
+                m["byteStride"].as_u64().unwrap() * m["count"].as_u64().unwrap()
+            );
+            let real = &buffers[m["buffer"].as_u64().unwrap() as usize];
+            assert!(real
+                .pointer("/extensions/EXT_meshopt_compression")
+                .is_none());
+        }
+    }
+    assert_eq!(compressed_views, 3 * 4, "4 streams per level, 3 levels");
+}
+
+#[test]
+fn meshopt_glb_decodes_to_the_plain_data() {
+    let (pj, pb, ps) = write("m-plain-glb", WriteOptions::default());
+    let (cj, cb, cs) = write(
+        "m-glb",
+        WriteOptions {
+            quantize: false,
+            compression: Compression::Meshopt,
+        },
+    );
+    check_meshopt_structure(&cj);
+    assert_same_decoded(&pj, &pb, &cj, &cb);
+    for (p, c) in ps.meshes[0]
+        .level_bytes
+        .iter()
+        .zip(&cs.meshes[0].level_bytes)
+    {
+        assert!(c < p, "compressed level {c} >= plain {p}");
+    }
+}
+
+#[test]
+fn meshopt_quantized_gltf_decodes_to_the_quantized_data() {
+    let q = WriteOptions {
+        quantize: true,
+        compression: Compression::None,
+    };
+    let qc = WriteOptions {
+        quantize: true,
+        compression: Compression::Meshopt,
+    };
+    let (pj, pb, _) = write("mq-plain-gltf", q);
+    let (cj, cb, _) = write("mq-gltf", qc);
+    check_meshopt_structure(&cj);
+    assert!(has(&cj, "extensionsRequired", "KHR_mesh_quantization"));
+    assert_same_decoded(&pj, &pb, &cj, &cb);
+}

@@ -1,0 +1,342 @@
+//! Shared helpers of the `gltf_out_*` tests: a generated icosphere, LOD chains
+//! made with `meshopt::simplify`, scratch directories, a minimal accessor
+//! decoder (plain, quantized and meshopt-compressed data) and copies of every
+//! output into `$LODGEN_TEST_OUT` for the glTF-Validator CI step.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use lodgen::coverage::assign_screen_coverages;
+use lodgen::gltf_out::WriteSummary;
+use lodgen::scene::{LodLevel, LodMesh, Primitive};
+use serde_json::Value;
+
+/// An icosphere of radius `r` around `center`, subdivided `n` times
+/// (20 * 4^n triangles), welded.
+pub fn icosphere(n: u32, r: f32, center: [f32; 3]) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut pos: Vec<[f32; 3]> = vec![
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ];
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..n {
+        let mut mids: std::collections::BTreeMap<(u32, u32), u32> = Default::default();
+        let mut mid = |a: u32, b: u32, pos: &mut Vec<[f32; 3]>| {
+            *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (p, q) = (pos[a as usize], pos[b as usize]);
+                pos.push([
+                    (p[0] + q[0]) / 2.0,
+                    (p[1] + q[1]) / 2.0,
+                    (p[2] + q[2]) / 2.0,
+                ]);
+                pos.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        for [a, b, c] in tris {
+            let ab = mid(a, b, &mut pos);
+            let bc = mid(b, c, &mut pos);
+            let ca = mid(c, a, &mut pos);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    let pos = pos
+        .iter()
+        .map(|p| {
+            let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            [
+                center[0] + r * p[0] / l,
+                center[1] + r * p[1] / l,
+                center[2] + r * p[2] / l,
+            ]
+        })
+        .collect();
+    (pos, tris.into_iter().flatten().collect())
+}
+
+/// Spherical UVs in [0, 1].
+pub fn sphere_uvs(pos: &[[f32; 3]], center: [f32; 3]) -> Vec<[f32; 2]> {
+    pos.iter()
+        .map(|p| {
+            let d = [p[0] - center[0], p[1] - center[1], p[2] - center[2]];
+            let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let u = 0.5 + d[2].atan2(d[0]) / (2.0 * std::f32::consts::PI);
+            let v = 0.5 - (d[1] / l).clamp(-1.0, 1.0).asin() / std::f32::consts::PI;
+            [u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)]
+        })
+        .collect()
+}
+
+/// A chain: level 0 = `prim`, then `meshopt::simplify` to each ratio (the
+/// coarser levels keep the full vertex arrays). Hausdorff errors come from
+/// meshopt's relative error; coverages from `assign_screen_coverages`.
+pub fn chain(name: &str, source: usize, prim: Primitive, ratios: &[f64]) -> LodMesh {
+    let bytes: Vec<u8> = prim
+        .positions
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    let adapter = meshopt::VertexDataAdapter::new(&bytes, 12, 0).unwrap();
+    let mut levels = vec![LodLevel {
+        primitives: vec![prim.clone()],
+        ..Default::default()
+    }];
+    for &ratio in ratios {
+        let target = ((prim.indices.len() as f64 * ratio) as usize / 3) * 3;
+        let mut error = 0.0f32;
+        let indices = meshopt::simplify(
+            &prim.indices,
+            &adapter,
+            target,
+            1.0,
+            meshopt::SimplifyOptions::None,
+            Some(&mut error),
+        );
+        assert!(
+            indices.len() < prim.indices.len(),
+            "simplify made no progress"
+        );
+        levels.push(LodLevel {
+            primitives: vec![Primitive {
+                indices,
+                ..prim.clone()
+            }],
+            hausdorff: (error as f64).max(1e-4) * (levels.len() as f64),
+            ..Default::default()
+        });
+    }
+    let mut lod = LodMesh {
+        source,
+        name: name.into(),
+        levels,
+    };
+    assign_screen_coverages(&mut lod);
+    lod
+}
+
+/// A fresh empty scratch directory for one test.
+pub fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lodgen-gltf-out-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Copies every written file into `$LODGEN_TEST_OUT/<prefix>/` when set.
+pub fn publish(prefix: &str, summary: &WriteSummary) {
+    let Some(out) = std::env::var_os("LODGEN_TEST_OUT") else {
+        return;
+    };
+    let dir = Path::new(&out).join(prefix);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, _) in &summary.files {
+        std::fs::copy(file, dir.join(file.file_name().unwrap())).unwrap();
+    }
+}
+
+/// Triangles as position triples, each rotated to start at its smallest
+/// corner, sorted: equal for two index buffers drawing the same triangles.
+pub fn canonical_triangles(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[[u32; 3]; 3]> {
+    let key = |i: u32| positions[i as usize].map(f32::to_bits);
+    let mut out: Vec<[[u32; 3]; 3]> = indices
+        .chunks_exact(3)
+        .map(|t| {
+            let c = [key(t[0]), key(t[1]), key(t[2])];
+            let m = (0..3).min_by_key(|&i| c[i]).unwrap();
+            [c[m], c[(m + 1) % 3], c[(m + 2) % 3]]
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// The JSON and binary buffers of a written file (`.glb`: BIN chunk is
+/// buffer 0; `.gltf`: buffers from their URIs; placeholder buffers empty).
+pub fn load_raw(path: &Path) -> (Value, Vec<Vec<u8>>) {
+    let bytes = std::fs::read(path).unwrap();
+    if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(&bytes).unwrap();
+        let json: Value = serde_json::from_slice(&glb.json).unwrap();
+        let n = json["buffers"].as_array().map_or(0, Vec::len);
+        let mut buffers = vec![Vec::new(); n];
+        if n > 0 {
+            buffers[0] = glb.bin.unwrap().into_owned();
+        }
+        (json, buffers)
+    } else {
+        let json: Value = serde_json::from_slice(&bytes).unwrap();
+        let buffers = json["buffers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| match b["uri"].as_str() {
+                Some(uri) => std::fs::read(path.parent().unwrap().join(uri)).unwrap(),
+                None => Vec::new(),
+            })
+            .collect();
+        (json, buffers)
+    }
+}
+
+/// The bytes of a buffer view, decompressing `EXT_meshopt_compression` with
+/// meshopt's decoders (and checking the vertex codec version byte 0xa0).
+pub fn view_bytes(json: &Value, buffers: &[Vec<u8>], view: usize) -> Vec<u8> {
+    let v = &json["bufferViews"][view];
+    if let Some(m) = v.pointer("/extensions/EXT_meshopt_compression") {
+        let buf = &buffers[m["buffer"].as_u64().unwrap() as usize];
+        let off = m["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = m["byteLength"].as_u64().unwrap() as usize;
+        let data = &buf[off..off + len];
+        let count = m["count"].as_u64().unwrap() as usize;
+        let stride = m["byteStride"].as_u64().unwrap() as usize;
+        match m["mode"].as_str().unwrap() {
+            "ATTRIBUTES" => {
+                assert_eq!(data[0], 0xa0, "vertex stream must use codec version 0");
+                fn dec<T: Clone + Default + AsRef<[u8]>>(data: &[u8], count: usize) -> Vec<u8> {
+                    meshopt::decode_vertex_buffer::<T>(data, count)
+                        .unwrap()
+                        .iter()
+                        .flat_map(|e| e.as_ref().to_vec())
+                        .collect()
+                }
+                match stride {
+                    4 => dec::<[u8; 4]>(data, count),
+                    8 => dec::<[u8; 8]>(data, count),
+                    12 => dec::<[u8; 12]>(data, count),
+                    s => panic!("stride {s}"),
+                }
+            }
+            "TRIANGLES" => {
+                assert_eq!(data[0], 0xe1, "triangle codec header");
+                if stride == 2 {
+                    meshopt::decode_index_buffer::<u16>(data, count)
+                        .unwrap()
+                        .into_iter()
+                        .flat_map(u16::to_le_bytes)
+                        .collect()
+                } else {
+                    meshopt::decode_index_buffer::<u32>(data, count)
+                        .unwrap()
+                        .into_iter()
+                        .flat_map(u32::to_le_bytes)
+                        .collect()
+                }
+            }
+            m => panic!("mode {m}"),
+        }
+    } else {
+        let buf = &buffers[v["buffer"].as_u64().unwrap() as usize];
+        let off = v["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = v["byteLength"].as_u64().unwrap() as usize;
+        buf[off..off + len].to_vec()
+    }
+}
+
+/// Decodes an accessor to f64 components (normalized integers mapped to
+/// [-1, 1] / [0, 1]; indices as their integer values).
+pub fn accessor_values(json: &Value, buffers: &[Vec<u8>], accessor: usize) -> Vec<Vec<f64>> {
+    let a = &json["accessors"][accessor];
+    let view = a["bufferView"].as_u64().unwrap() as usize;
+    let data = view_bytes(json, buffers, view);
+    let count = a["count"].as_u64().unwrap() as usize;
+    let comps = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        t => panic!("type {t}"),
+    };
+    let ctype = a["componentType"].as_u64().unwrap();
+    let normalized = a["normalized"].as_bool().unwrap_or(false);
+    let size = match ctype {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        _ => 4,
+    };
+    let stride = json["bufferViews"][view]["byteStride"]
+        .as_u64()
+        .map_or(size * comps, |s| s as usize);
+    let off = a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    (0..count)
+        .map(|i| {
+            (0..comps)
+                .map(|c| {
+                    let at = off + i * stride + c * size;
+                    let b = &data[at..at + size];
+                    match (ctype, normalized) {
+                        (5126, _) => f32::from_le_bytes(b.try_into().unwrap()) as f64,
+                        (5125, false) => u32::from_le_bytes(b.try_into().unwrap()) as f64,
+                        (5123, false) => u16::from_le_bytes(b.try_into().unwrap()) as f64,
+                        (5123, true) => u16::from_le_bytes(b.try_into().unwrap()) as f64 / 65535.0,
+                        (5122, true) => {
+                            (i16::from_le_bytes(b.try_into().unwrap()) as f64 / 32767.0).max(-1.0)
+                        }
+                        (5120, true) => ((b[0] as i8) as f64 / 127.0).max(-1.0),
+                        t => panic!("component type {t:?}"),
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Node indices reachable from any scene.
+pub fn scene_nodes(json: &Value) -> Vec<usize> {
+    let mut seen = Vec::new();
+    let mut stack: Vec<usize> = json["scenes"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .flat_map(|s| {
+            s["nodes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|n| n.as_u64().unwrap() as usize)
+        })
+        .collect();
+    while let Some(n) = stack.pop() {
+        if seen.contains(&n) {
+            continue;
+        }
+        seen.push(n);
+        if let Some(c) = json["nodes"][n]["children"].as_array() {
+            stack.extend(c.iter().map(|v| v.as_u64().unwrap() as usize));
+        }
+    }
+    seen.sort();
+    seen
+}

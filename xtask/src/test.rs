@@ -1,0 +1,309 @@
+//! `cargo xtask test [CARGO-TEST-ARGS]`: the project's single "run all tests" command.
+//!
+//! 1. `cargo test --workspace` with `LODGEN_TEST_OUT=<root>/target/test-out`
+//!    (emptied first); Rust tests write every glTF they produce there.
+//! 2. Khronos glTF-Validator on everything in that directory
+//!    (`node tests/js/validate.mjs [--require] target/test-out`).
+//! 3. Babylon.js in headless Chromium for every `NAME.report.json` there that
+//!    has a sibling `NAME.glb` (`node tests/js/babylon-lod.mjs`).
+//!
+//! Outputs are required (no glTF file, or no report/.glb pair, is a failure)
+//! when `LODGEN_REQUIRE_GLTF=1`, or, when that variable is unset, as soon as
+//! any Rust source under `crates/` mentions `LODGEN_TEST_OUT`, i.e. once tests
+//! write outputs. `LODGEN_REQUIRE_GLTF=0` turns the requirement off.
+//!
+//! `npm ci` runs in `tests/js` when its `node_modules` is missing. When node,
+//! npm or Chromium (`/usr/bin/chromium`, or `LODGEN_CHROMIUM`) is missing the
+//! browser/JS checks fail under `CI=true` and are skipped with a notice
+//! otherwise. Child output is streamed; the exit status is non-zero if
+//! anything failed.
+
+use std::ffi::OsString;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+
+use crate::workspace_root;
+
+/// The environment variable through which Rust tests learn where to write glTF files.
+const TEST_OUT_ENV: &str = "LODGEN_TEST_OUT";
+const REQUIRE_ENV: &str = "LODGEN_REQUIRE_GLTF";
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Outcome {
+    Passed,
+    Failed,
+    Skipped,
+}
+
+struct Step {
+    name: String,
+    outcome: Outcome,
+    secs: f64,
+    note: String,
+}
+
+#[derive(Default)]
+struct Steps(Vec<Step>);
+
+impl Steps {
+    fn record(&mut self, name: &str, outcome: Outcome, secs: f64, note: &str) {
+        let word = match outcome {
+            Outcome::Passed => "ok",
+            Outcome::Failed => "FAILED",
+            Outcome::Skipped => "skipped",
+        };
+        let sep = if note.is_empty() { "" } else { ": " };
+        println!("<== {name}: {word} ({secs:.1} s){sep}{note}");
+        self.0.push(Step {
+            name: name.to_string(),
+            outcome,
+            secs,
+            note: note.to_string(),
+        });
+    }
+
+    /// Runs `cmd` with inherited stdio and records its outcome.
+    fn run(&mut self, name: &str, cmd: &mut Command) -> Outcome {
+        println!("==> {name}: {}", describe(cmd));
+        let t = Instant::now();
+        let (outcome, note) = match cmd.status() {
+            Ok(s) if s.success() => (Outcome::Passed, String::new()),
+            Ok(s) => (Outcome::Failed, format!("exited with {s}")),
+            Err(e) => (Outcome::Failed, format!("could not start: {e}")),
+        };
+        self.record(name, outcome, t.elapsed().as_secs_f64(), &note);
+        outcome
+    }
+
+    /// A missing tool: a failure on CI, a skipped step with a notice elsewhere.
+    fn missing(&mut self, name: &str, ci: bool, why: &str) {
+        if ci {
+            self.record(
+                name,
+                Outcome::Failed,
+                0.0,
+                &format!("{why} (required because CI=true)"),
+            );
+        } else {
+            println!("NOTICE: {name} skipped: {why}. CI (CI=true) fails here instead.");
+            self.record(name, Outcome::Skipped, 0.0, why);
+        }
+    }
+
+    fn count(&self, o: Outcome) -> usize {
+        self.0.iter().filter(|s| s.outcome == o).count()
+    }
+}
+
+fn describe(cmd: &Command) -> String {
+    let mut s = cmd.get_program().to_string_lossy().into_owned();
+    for a in cmd.get_args() {
+        s.push(' ');
+        s.push_str(&a.to_string_lossy());
+    }
+    if let Some(dir) = cmd.get_current_dir() {
+        s.push_str(&format!("   (in {})", dir.display()));
+    }
+    s
+}
+
+fn is_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+}
+
+/// Whether `program --version` runs.
+fn tool_works(program: &str) -> bool {
+    Command::new(program)
+        .arg("--version")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+pub fn chromium_path() -> PathBuf {
+    std::env::var_os("LODGEN_CHROMIUM")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/usr/bin/chromium"))
+}
+
+/// Files under `dir` (recursively, sorted) whose name satisfies `keep`.
+pub fn files_under(dir: &Path, keep: &dyn Fn(&str) -> bool) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    if !dir.is_dir() {
+        return Ok(out);
+    }
+    let mut entries: Vec<_> = fs::read_dir(dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .collect::<std::io::Result<_>>()
+        .with_context(|| format!("reading {}", dir.display()))?;
+    entries.sort_by_key(|e| e.file_name());
+    for e in entries {
+        let path = e.path();
+        let ty = e.file_type()?;
+        if ty.is_dir() {
+            out.extend(files_under(&path, keep)?);
+        } else if ty.is_file() && keep(&e.file_name().to_string_lossy()) {
+            out.push(path);
+        }
+    }
+    Ok(out)
+}
+
+/// Whether missing test outputs are a failure (see the module docs).
+fn outputs_required(root: &Path) -> Result<(bool, String)> {
+    if let Ok(v) = std::env::var(REQUIRE_ENV) {
+        let on = matches!(v.as_str(), "1" | "true" | "yes");
+        return Ok((on, format!("{REQUIRE_ENV}={v}")));
+    }
+    let sources = files_under(&root.join("crates"), &|n| n.ends_with(".rs"))?;
+    for src in sources {
+        let text =
+            fs::read_to_string(&src).with_context(|| format!("reading {}", src.display()))?;
+        if text.contains(TEST_OUT_ENV) {
+            let rel = src.strip_prefix(root).unwrap_or(&src).display().to_string();
+            return Ok((true, format!("{rel} writes to {TEST_OUT_ENV}")));
+        }
+    }
+    Ok((
+        false,
+        format!("no test under crates/ uses {TEST_OUT_ENV} yet and {REQUIRE_ENV} is unset"),
+    ))
+}
+
+pub fn run(cargo_test_args: &[String]) -> Result<()> {
+    let root = workspace_root();
+    let out = root.join("target").join("test-out");
+    let js = root.join("tests").join("js");
+    let ci = is_ci();
+    let mut steps = Steps::default();
+    let t_all = Instant::now();
+
+    if out.exists() {
+        fs::remove_dir_all(&out).with_context(|| format!("emptying {}", out.display()))?;
+    }
+    fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+
+    // 1. Rust tests.
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));
+    steps.run(
+        "cargo test",
+        Command::new(cargo)
+            .args(["test", "--workspace"])
+            .args(cargo_test_args)
+            .env(TEST_OUT_ENV, &out)
+            .current_dir(&root),
+    );
+
+    // 2 and 3. JS checks on what the Rust tests wrote.
+    let (require, why) = outputs_required(&root)?;
+    println!(
+        "xtask test: test outputs in {} are {} ({why})",
+        out.display(),
+        if require { "required" } else { "optional" }
+    );
+    let gltf_files = files_under(&out, &|n| n.ends_with(".glb") || n.ends_with(".gltf"))?;
+    let pairs: Vec<(PathBuf, PathBuf)> = files_under(&out, &|n| n.ends_with(".report.json"))?
+        .into_iter()
+        .filter_map(|report| {
+            let name = report.file_name()?.to_string_lossy().into_owned();
+            let glb = report.with_file_name(format!("{}.glb", name.strip_suffix(".report.json")?));
+            glb.is_file().then_some((glb, report))
+        })
+        .collect();
+    println!(
+        "xtask test: {} glTF file(s), {} report/.glb pair(s) in {}",
+        gltf_files.len(),
+        pairs.len(),
+        out.display()
+    );
+
+    let node_ready = if !tool_works("node") {
+        steps.missing(
+            "JS checks",
+            ci,
+            "node is not installed (apt-get install nodejs npm)",
+        );
+        false
+    } else if js.join("node_modules").is_dir() {
+        true
+    } else if !tool_works("npm") {
+        steps.missing("npm ci", ci, "npm is not installed (apt-get install npm)");
+        false
+    } else {
+        let mut npm = Command::new("npm");
+        npm.args(["ci", "--no-audit", "--no-fund"]).current_dir(&js);
+        steps.run("npm ci", &mut npm) == Outcome::Passed
+    };
+
+    if node_ready {
+        let mut validate = Command::new("node");
+        validate.arg(js.join("validate.mjs"));
+        if require {
+            validate.arg("--require");
+        }
+        validate.arg(&out).current_dir(&root);
+        steps.run("glTF-Validator", &mut validate);
+
+        let chromium = chromium_path();
+        if pairs.is_empty() {
+            let why = format!(
+                "no NAME.report.json with a sibling NAME.glb in {}",
+                out.display()
+            );
+            if require {
+                steps.record("Babylon.js MSFT_lod", Outcome::Failed, 0.0, &why);
+            } else {
+                println!("NOTICE: Babylon.js MSFT_lod check skipped: {why}.");
+                steps.record("Babylon.js MSFT_lod", Outcome::Skipped, 0.0, &why);
+            }
+        } else if !chromium.is_file() {
+            let why = format!(
+                "{} not found (apt-get install chromium, or set LODGEN_CHROMIUM)",
+                chromium.display()
+            );
+            steps.missing("Babylon.js MSFT_lod", ci, &why);
+        } else {
+            for (glb, report) in &pairs {
+                let rel = glb.strip_prefix(&out).unwrap_or(glb).display().to_string();
+                steps.run(
+                    &format!("Babylon.js MSFT_lod {rel}"),
+                    Command::new("node")
+                        .arg(js.join("babylon-lod.mjs"))
+                        .arg(glb)
+                        .arg(report)
+                        .current_dir(&root),
+                );
+            }
+        }
+    }
+
+    println!(
+        "\nxtask test summary ({:.1} s):",
+        t_all.elapsed().as_secs_f64()
+    );
+    for s in &steps.0 {
+        let word = match s.outcome {
+            Outcome::Passed => "ok     ",
+            Outcome::Failed => "FAILED ",
+            Outcome::Skipped => "skipped",
+        };
+        let sep = if s.note.is_empty() { "" } else { ": " };
+        println!("  {word} {:>6.1} s  {}{sep}{}", s.secs, s.name, s.note);
+    }
+    let (passed, failed, skipped) = (
+        steps.count(Outcome::Passed),
+        steps.count(Outcome::Failed),
+        steps.count(Outcome::Skipped),
+    );
+    println!("xtask-test: {passed} passed, {failed} failed, {skipped} skipped");
+    if failed > 0 {
+        bail!("{failed} check(s) failed");
+    }
+    Ok(())
+}
