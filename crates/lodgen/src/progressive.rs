@@ -363,6 +363,145 @@ fn percent_decode(uri: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// One mesh's stream for [`embed`]: the chain's name as the writer used it
+/// (its level meshes are named `{name}_LOD{k}`, `k = 0` the finest), the
+/// stream, and the record count of each level, finest first.
+#[derive(Clone, Debug)]
+pub struct ChainStream {
+    pub name: String,
+    pub levels: Vec<usize>,
+    pub stream: Vec<u8>,
+}
+
+impl ChainStream {
+    /// The stream of one [`crate::lod::MeshBuild`]: its whole progressive
+    /// mesh (every primitive of the mesh, flattened) with its level split
+    /// counts, on the default 16-bit grid.
+    pub fn from_build(b: &crate::lod::MeshBuild) -> ChainStream {
+        let pm = &b.simplified.pm;
+        ChainStream {
+            name: b.lod.name.clone(),
+            levels: b.level_splits.clone(),
+            stream: lodgen_pm::stream::encode(
+                pm,
+                &b.level_splits,
+                lodgen_pm::stream::EncodeOptions::DEFAULT,
+            ),
+        }
+    }
+}
+
+/// Serialize a GLB from its JSON document and binary chunk.
+pub fn write_glb(root: &Value, bin: &[u8]) -> Result<Vec<u8>, ProgressiveError> {
+    let mut json = serde_json::to_vec(root)?;
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = u32::try_from(total).map_err(|_| ProgressiveError::Glb("over 4 GiB".into()))?;
+    let mut out = Vec::with_capacity(total as usize);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&total.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
+    out.extend_from_slice(&json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+        out.extend_from_slice(&bin);
+    }
+    Ok(out)
+}
+
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ProgressiveError> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|source| {
+            let _ = std::fs::remove_file(&tmp);
+            ProgressiveError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })
+}
+
+/// Add `LODGEN_progressive` to a `.glb` / `.gltf` the glTF writer has just
+/// written: each chain's stream goes on primitive 0 of its coarsest level's
+/// mesh (`{name}_LOD{levels.len() - 1}`), at the end of the GLB binary chunk,
+/// or for `.gltf` in `STEM.stream.bin` (`STEM.streamI.bin` when several
+/// meshes carry one). Files are replaced atomically; the result is a pure
+/// function of the inputs. A chain whose coarsest mesh is not found is an
+/// error (nothing is written).
+pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError> {
+    let io = |source| ProgressiveError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let bytes = std::fs::read(path).map_err(io)?;
+    let glb = bytes.starts_with(b"glTF");
+    let (mut root, mut bin) = if glb {
+        let (root, bin) = parse_glb(&bytes)?;
+        (root, bin.to_vec())
+    } else {
+        (serde_json::from_slice(&bytes)?, Vec::new())
+    };
+    let mut files = Vec::new();
+    for (i, c) in chains.iter().enumerate() {
+        let want = format!("{}_LOD{}", c.name, c.levels.len().saturating_sub(1));
+        let mesh = root
+            .get("meshes")
+            .and_then(Value::as_array)
+            .and_then(|m| {
+                m.iter()
+                    .position(|m| m.get("name").and_then(Value::as_str) == Some(&want))
+            })
+            .ok_or_else(|| json_err("/meshes", format!("no mesh named {want:?}")))?;
+        let placement = if glb {
+            Placement::Glb { bin: &mut bin }
+        } else {
+            let stem = path
+                .file_stem()
+                .map_or_else(|| "out".into(), |s| s.to_string_lossy().into_owned());
+            let name = if chains.len() == 1 {
+                format!("{stem}.stream.bin")
+            } else {
+                format!("{stem}.stream{i}.bin")
+            };
+            let uri: String = name
+                .bytes()
+                .map(|b| match b {
+                    b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'_' | b'.' | b'~' => {
+                        (b as char).to_string()
+                    }
+                    _ => format!("%{b:02X}"),
+                })
+                .collect();
+            files.push((path.with_file_name(&name), c.stream.clone()));
+            Placement::External { uri }
+        };
+        attach(&mut root, mesh, 0, &c.stream, &c.levels, placement)?;
+    }
+    for (p, data) in &files {
+        write_atomically(p, data)?;
+    }
+    let out = if glb {
+        write_glb(&root, &bin)?
+    } else {
+        let mut json = serde_json::to_vec_pretty(&root)?;
+        json.push(b'\n');
+        json
+    };
+    write_atomically(path, &out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

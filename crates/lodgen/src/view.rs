@@ -6,7 +6,8 @@
 //! tests compare the browser against ([`ViewData::level_summary`]).
 //!
 //! Input: a glTF / GLB carrying `LODGEN_progressive` (see
-//! [`crate::progressive`]); or an OBJ mesh (its `v` / `f` lines), run
+//! [`crate::progressive`]; `lodgen IN -o OUT.glb --progressive` writes one);
+//! or any mesh [`crate::io`] reads (a glTF without the extension too), run
 //! through an in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 /
 //! 2 %, stream-encoded.
 //!
@@ -15,8 +16,8 @@
 //! bytes=a-b` requests with 206 Partial Content so the page can fetch it in
 //! chunks).
 
-use crate::progressive;
-use anyhow::{bail, Context};
+use crate::{cli, io, progressive};
+use anyhow::Context;
 use lodgen_pm::levels::{splits_for, LevelSpec};
 use lodgen_pm::stream::{decode, encode, EncodeOptions};
 use lodgen_pm::{simplify, ProgressiveMesh, SimplifyOptions};
@@ -101,66 +102,9 @@ fn pipeline_coverage(pm: &ProgressiveMesh, levels: &[usize], diagonal: f64) -> V
     out
 }
 
-/// `v` / `f` lines of an OBJ (polygons fanned, negative indices relative).
-fn read_obj(path: &Path) -> anyhow::Result<(Vec<[f32; 3]>, Vec<u32>)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let at = || format!("{}:{}", path.display(), n + 1);
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let mut p = [0f32; 3];
-                for c in &mut p {
-                    let s = it.next().with_context(|| {
-                        format!("{}: vertex with fewer than 3 coordinates", at())
-                    })?;
-                    *c = s
-                        .parse()
-                        .with_context(|| format!("{}: bad coordinate {s:?}", at()))?;
-                    if !c.is_finite() {
-                        bail!("{}: non-finite coordinate {s:?}", at());
-                    }
-                }
-                positions.push(p);
-            }
-            Some("f") => {
-                let mut f = Vec::new();
-                for s in it {
-                    let i: i64 = s
-                        .split('/')
-                        .next()
-                        .unwrap_or("")
-                        .parse()
-                        .with_context(|| format!("{}: bad face index {s:?}", at()))?;
-                    let i = match i {
-                        0 => bail!("{}: face refers to vertex 0 (OBJ indices start at 1)", at()),
-                        i if i > 0 => i - 1,
-                        i => positions.len() as i64 + i,
-                    };
-                    if i < 0 || i >= positions.len() as i64 {
-                        bail!("{}: face index {s} out of range", at());
-                    }
-                    f.push(i as u32);
-                }
-                if f.len() < 3 {
-                    bail!("{}: face with fewer than 3 vertices", at());
-                }
-                for i in 1..f.len() - 1 {
-                    indices.extend_from_slice(&[f[0], f[i], f[i + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok((positions, indices))
-}
-
 impl ViewData {
-    /// Load `path`: a glTF/GLB with `LODGEN_progressive`, or an OBJ through
-    /// the in-memory pipeline.
+    /// Load `path`: a glTF/GLB with `LODGEN_progressive`, or any readable
+    /// mesh through the in-memory pipeline.
     pub fn load(path: &Path) -> anyhow::Result<ViewData> {
         let name = path
             .file_name()
@@ -169,37 +113,26 @@ impl ViewData {
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
-        match ext.as_str() {
-            "glb" | "gltf" => {
-                let (found, stream) = progressive::read_file(path)
-                    .with_context(|| format!("reading {}", path.display()))?
-                    .with_context(|| {
-                        format!(
-                            "{}: no {} extension (write it with lodgen)",
-                            path.display(),
-                            progressive::EXTENSION
-                        )
-                    })?;
+        if ext == "glb" || ext == "gltf" {
+            let found = progressive::read_file(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            if let Some((found, stream)) = found {
                 decode(&stream)
                     .with_context(|| format!("{}: decoding the stream", path.display()))?;
-                Ok(ViewData {
+                return Ok(ViewData {
                     name,
                     stream,
                     levels: found.levels,
                     screen_coverage: found.screen_coverage,
                     source: "gltf",
-                })
+                });
             }
-            "obj" => {
-                let (positions, indices) = read_obj(path)?;
-                Self::from_mesh(name, &positions, &indices)
-            }
-            _ => bail!(
-                "{}: expected a .glb/.gltf with {} or an .obj",
-                path.display(),
-                progressive::EXTENSION
-            ),
         }
+        // any other mesh (or a glTF without the extension): the pipeline, on
+        // every mesh the file's scene draws, merged
+        let scene = io::read_scene(path).with_context(|| format!("reading {}", path.display()))?;
+        let mesh = cli::merged_mesh(&scene);
+        Self::from_mesh(name, &mesh.positions, &mesh.indices())
     }
 
     /// The in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 / 2 %
