@@ -4,6 +4,9 @@
 //! index hashes, and runs the script, which checks the page against them and
 //! writes `target/test-out/viewer-*.png`.
 //!
+//! `LODGEN_VIEW_FILE=path` serves that file instead (e.g. a `.glb` written
+//! with `--progressive`).
+//!
 //! Needs `node`, Chromium (`/usr/bin/chromium` or `LODGEN_CHROMIUM`) and
 //! `tests/js/node_modules/playwright-core`. Without them the test says so and
 //! passes, unless `LODGEN_BROWSER_TEST=1` (as in `.ci/run`) makes their
@@ -44,7 +47,11 @@ fn viewer_page_matches_levels_in_headless_chromium() {
         return;
     }
     let bunny = PathBuf::from("/work/shared/assets/bunny.obj");
-    let data = if bunny.exists() {
+    // LODGEN_VIEW_FILE: any file `lodgen view` accepts (e.g. a `.glb`
+    // written with --progressive) instead of the bunny
+    let data = if let Some(file) = std::env::var_os("LODGEN_VIEW_FILE") {
+        ViewData::load(std::path::Path::new(&file)).unwrap()
+    } else if bunny.exists() {
         ViewData::load(&bunny).unwrap()
     } else {
         let m = torus_knot(2, 3, 300, 24, 0.02);
