@@ -31,6 +31,7 @@ pub mod options;
 pub mod pairs;
 pub mod quadric;
 pub mod shapes;
+pub mod stream;
 pub mod vsplit;
 
 pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};

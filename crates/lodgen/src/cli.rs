@@ -85,6 +85,12 @@ pub struct BuildArgs {
     #[arg(long, value_enum, default_value_t = CompressMode::None)]
     pub compress: CompressMode,
 
+    /// Also store the vertex-split stream (glTF extension LODGEN_progressive,
+    /// docs/LODGEN_progressive.md) on each mesh's coarsest level, for
+    /// viewers that refine while downloading (`lodgen view`). Off by default.
+    #[arg(long)]
+    pub progressive: bool,
+
     /// Also write the table as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
@@ -292,6 +298,16 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
     let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
     let summary = gltf_out::write_lods(&output, &scene, &lods, &args.write_options())
         .with_context(|| format!("writing {}", output.display()))?;
+    // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
+    if args.progressive {
+        let chains: Vec<_> = builds
+            .iter()
+            .map(crate::progressive::ChainStream::from_build)
+            .collect();
+        crate::progressive::embed(&output, &chains)
+            .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
+    }
+    // --- end LODGEN_progressive ---
     if let Some(b) = bar {
         b.finish_and_clear();
     }

@@ -8,4 +8,6 @@ pub mod gltf_out;
 pub mod inspect;
 pub mod io;
 pub mod lod;
+pub mod progressive;
 pub mod scene;
+pub mod view;

@@ -1,0 +1,602 @@
+//! The `LODGEN_progressive` glTF extension (spec: `docs/LODGEN_progressive.md`):
+//! the vertex-split stream of [`lodgen_pm::stream`] stored in a glTF file, on
+//! the coarsest `MSFT_lod` level's primitive.
+//!
+//! Owns [`attach`] (used by the glTF writer on the document it is building:
+//! adds the stream's buffer / buffer view, the primitive extension and the
+//! `extensionsUsed` entry) and [`read_file`] / [`read_glb`] / [`find`] (find
+//! and slice the stream in a parsed document). Works on `serde_json::Value`
+//! so it depends on nothing else in this crate; decoding is the core's.
+
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The extension's name, as it appears in `extensionsUsed` and on the
+/// primitive.
+pub const EXTENSION: &str = "LODGEN_progressive";
+
+/// Where [`attach`] puts the stream bytes.
+#[derive(Debug)]
+pub enum Placement<'a> {
+    /// At the end of the GLB binary chunk being built (buffer 0, which must
+    /// be the GLB-stored buffer), 4-byte aligned; `buffers[0].byteLength` is
+    /// updated (the buffer is created when the document has none).
+    Glb { bin: &'a mut Vec<u8> },
+    /// In a buffer of its own whose `uri` is `uri`; the caller writes the
+    /// stream bytes to that file (relative to the `.gltf`).
+    External { uri: String },
+}
+
+/// Why the extension could not be added or read.
+#[derive(Debug, Error)]
+pub enum ProgressiveError {
+    #[error("{path}: {what}")]
+    Json { path: String, what: String },
+    #[error("not a GLB file: {0}")]
+    Glb(String),
+    #[error("reading {path}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("parsing the glTF JSON")]
+    Parse(#[from] serde_json::Error),
+    #[error("the LODGEN_progressive stream")]
+    Stream(#[from] lodgen_pm::stream::StreamError),
+}
+
+fn json_err(path: impl Into<String>, what: impl Into<String>) -> ProgressiveError {
+    ProgressiveError::Json {
+        path: path.into(),
+        what: what.into(),
+    }
+}
+
+fn array_mut<'a>(root: &'a mut Value, key: &str) -> Result<&'a mut Vec<Value>, ProgressiveError> {
+    let obj = root
+        .as_object_mut()
+        .ok_or_else(|| json_err("/", "the document root is not an object"))?;
+    obj.entry(key)
+        .or_insert_with(|| Value::Array(Vec::new()))
+        .as_array_mut()
+        .ok_or_else(|| json_err(format!("/{key}"), "not an array"))
+}
+
+/// Add the stream to the document: a buffer view (on a buffer chosen by
+/// `placement`), `meshes[mesh].primitives[primitive].extensions.LODGEN_progressive
+/// = { bufferView, levels }` and `"LODGEN_progressive"` in `extensionsUsed`
+/// (never `extensionsRequired`: the file stays loadable without it).
+///
+/// `levels[i]` is the record count reproducing the i-th level of the
+/// `MSFT_lod` chain, finest first (the node carrying `MSFT_lod`, then its
+/// `ids` in order), and should equal the stream header's own level table.
+/// Returns the buffer view index.
+pub fn attach(
+    root: &mut Value,
+    mesh: usize,
+    primitive: usize,
+    stream: &[u8],
+    levels: &[usize],
+    placement: Placement,
+) -> Result<usize, ProgressiveError> {
+    // check the primitive first so that an error leaves `root` unchanged
+    let prim_path = format!("/meshes/{mesh}/primitives/{primitive}");
+    if root
+        .pointer(&prim_path)
+        .and_then(Value::as_object)
+        .is_none()
+    {
+        return Err(json_err(prim_path, "no such primitive"));
+    }
+    let (buffer, offset) = match placement {
+        Placement::Glb { bin } => {
+            let buffers = array_mut(root, "buffers")?;
+            if buffers.is_empty() {
+                buffers.push(json!({ "byteLength": 0 }));
+            }
+            if buffers[0].get("uri").is_some() {
+                return Err(json_err(
+                    "/buffers/0",
+                    "has a uri: not the GLB-stored buffer",
+                ));
+            }
+            while bin.len() % 4 != 0 {
+                bin.push(0);
+            }
+            let offset = bin.len();
+            bin.extend_from_slice(stream);
+            while bin.len() % 4 != 0 {
+                bin.push(0);
+            }
+            buffers[0]["byteLength"] = bin.len().into();
+            (0, offset)
+        }
+        Placement::External { uri } => {
+            let buffers = array_mut(root, "buffers")?;
+            buffers.push(json!({ "byteLength": stream.len(), "uri": uri }));
+            (buffers.len() - 1, 0)
+        }
+    };
+    let views = array_mut(root, "bufferViews")?;
+    views.push(json!({ "buffer": buffer, "byteOffset": offset, "byteLength": stream.len() }));
+    let view = views.len() - 1;
+    let prim = root
+        .pointer_mut(&prim_path)
+        .and_then(Value::as_object_mut)
+        .ok_or_else(|| json_err(prim_path.clone(), "no such primitive"))?;
+    let ext = prim
+        .entry("extensions")
+        .or_insert_with(|| json!({}))
+        .as_object_mut()
+        .ok_or_else(|| json_err(format!("{prim_path}/extensions"), "not an object"))?;
+    ext.insert(
+        EXTENSION.into(),
+        json!({ "bufferView": view, "levels": levels }),
+    );
+    let used = array_mut(root, "extensionsUsed")?;
+    if !used.iter().any(|u| u == EXTENSION) {
+        used.push(EXTENSION.into());
+    }
+    Ok(view)
+}
+
+/// The extension as found in a document.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Found {
+    pub mesh: usize,
+    pub primitive: usize,
+    pub buffer_view: usize,
+    pub levels: Vec<usize>,
+    /// `(buffer, byteOffset, byteLength)` of the buffer view.
+    pub range: (usize, usize, usize),
+    /// The `MSFT_lod` chain holding `mesh`, finest first, as mesh indices,
+    /// with its `extras.MSFT_screencoverage` (empty when absent); just
+    /// `[mesh]` when no node lists it.
+    pub lod_meshes: Vec<usize>,
+    pub screen_coverage: Vec<f64>,
+}
+
+fn index(v: &Value, path: &str) -> Result<usize, ProgressiveError> {
+    v.as_u64()
+        .map(|x| x as usize)
+        .ok_or_else(|| json_err(path, "expected a non-negative integer"))
+}
+
+/// The first primitive carrying the extension, in mesh order.
+pub fn find(root: &Value) -> Result<Option<Found>, ProgressiveError> {
+    let Some(meshes) = root.get("meshes").and_then(Value::as_array) else {
+        return Ok(None);
+    };
+    for (m, mesh) in meshes.iter().enumerate() {
+        let Some(prims) = mesh.get("primitives").and_then(Value::as_array) else {
+            continue;
+        };
+        for (p, prim) in prims.iter().enumerate() {
+            let Some(ext) = prim.pointer(&format!("/extensions/{EXTENSION}")) else {
+                continue;
+            };
+            let path = format!("/meshes/{m}/primitives/{p}/extensions/{EXTENSION}");
+            let view = index(
+                ext.get("bufferView").unwrap_or(&Value::Null),
+                &format!("{path}/bufferView"),
+            )?;
+            let levels = ext
+                .get("levels")
+                .and_then(Value::as_array)
+                .ok_or_else(|| json_err(format!("{path}/levels"), "expected an array"))?
+                .iter()
+                .enumerate()
+                .map(|(i, v)| index(v, &format!("{path}/levels/{i}")))
+                .collect::<Result<Vec<_>, _>>()?;
+            let vpath = format!("/bufferViews/{view}");
+            let bv = root
+                .pointer(&vpath)
+                .ok_or_else(|| json_err(&vpath, "no such buffer view"))?;
+            let range = (
+                index(
+                    bv.get("buffer").unwrap_or(&Value::Null),
+                    &format!("{vpath}/buffer"),
+                )?,
+                bv.get("byteOffset")
+                    .map_or(Ok(0), |v| index(v, &format!("{vpath}/byteOffset")))?,
+                index(
+                    bv.get("byteLength").unwrap_or(&Value::Null),
+                    &format!("{vpath}/byteLength"),
+                )?,
+            );
+            let (lod_meshes, screen_coverage) = lod_chain(root, m);
+            return Ok(Some(Found {
+                mesh: m,
+                primitive: p,
+                buffer_view: view,
+                levels,
+                range,
+                lod_meshes,
+                screen_coverage,
+            }));
+        }
+    }
+    Ok(None)
+}
+
+/// The `MSFT_lod` chain (finest first, as mesh indices) that contains mesh
+/// `m`, with its screen coverage values.
+fn lod_chain(root: &Value, m: usize) -> (Vec<usize>, Vec<f64>) {
+    let nodes = root.get("nodes").and_then(Value::as_array);
+    let node_mesh =
+        |n: usize| -> Option<usize> { nodes?.get(n)?.get("mesh")?.as_u64().map(|x| x as usize) };
+    for node in nodes.into_iter().flatten() {
+        let Some(ids) = node
+            .pointer("/extensions/MSFT_lod/ids")
+            .and_then(Value::as_array)
+        else {
+            continue;
+        };
+        let mut chain: Vec<usize> = node
+            .get("mesh")
+            .and_then(Value::as_u64)
+            .map(|x| x as usize)
+            .into_iter()
+            .collect();
+        chain.extend(ids.iter().filter_map(|i| node_mesh(i.as_u64()? as usize)));
+        if chain.contains(&m) {
+            let cov = node
+                .pointer("/extras/MSFT_screencoverage")
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_f64).collect())
+                .unwrap_or_default();
+            return (chain, cov);
+        }
+    }
+    (vec![m], Vec::new())
+}
+
+/// A GLB split into its JSON document and binary chunk.
+pub fn parse_glb(bytes: &[u8]) -> Result<(Value, &[u8]), ProgressiveError> {
+    let u32_at = |at: usize| -> Result<u32, ProgressiveError> {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .ok_or_else(|| ProgressiveError::Glb(format!("truncated at byte {at}")))
+    };
+    if bytes.get(..4) != Some(b"glTF") {
+        return Err(ProgressiveError::Glb("bad magic".into()));
+    }
+    if u32_at(4)? != 2 {
+        return Err(ProgressiveError::Glb("not version 2".into()));
+    }
+    let mut at = 12;
+    let mut json = None;
+    let mut bin: &[u8] = &[];
+    while at + 8 <= bytes.len() {
+        let len = u32_at(at)? as usize;
+        let kind = u32_at(at + 4)?;
+        let body = bytes.get(at + 8..at + 8 + len).ok_or_else(|| {
+            ProgressiveError::Glb(format!("chunk at byte {at} overruns the file"))
+        })?;
+        match kind {
+            0x4E4F534A if json.is_none() => json = Some(serde_json::from_slice(body)?),
+            0x004E4942 if bin.is_empty() => bin = body,
+            _ => {}
+        }
+        at += 8 + len;
+    }
+    let json = json.ok_or_else(|| ProgressiveError::Glb("no JSON chunk".into()))?;
+    Ok((json, bin))
+}
+
+/// The extension and its stream bytes found in a GLB.
+pub fn read_glb(bytes: &[u8]) -> Result<Option<(Found, Vec<u8>)>, ProgressiveError> {
+    let (root, bin) = parse_glb(bytes)?;
+    let Some(found) = find(&root)? else {
+        return Ok(None);
+    };
+    let (buffer, off, len) = found.range;
+    if buffer != 0 || root.pointer("/buffers/0/uri").is_some() {
+        return Err(json_err(
+            format!("/bufferViews/{}", found.buffer_view),
+            "the stream of a GLB must be in its binary chunk (buffer 0)",
+        ));
+    }
+    let data = slice(bin, off, len, found.buffer_view)?.to_vec();
+    Ok(Some((found, data)))
+}
+
+fn slice(buf: &[u8], off: usize, len: usize, view: usize) -> Result<&[u8], ProgressiveError> {
+    off.checked_add(len)
+        .and_then(|end| buf.get(off..end))
+        .ok_or_else(|| json_err(format!("/bufferViews/{view}"), "range outside its buffer"))
+}
+
+/// Read a `.glb` or `.gltf` (external buffers resolved beside it) and return
+/// the extension and its stream bytes, or `None` when it has none.
+pub fn read_file(path: &Path) -> Result<Option<(Found, Vec<u8>)>, ProgressiveError> {
+    let io = |p: &Path| {
+        let p = p.to_path_buf();
+        move |source| ProgressiveError::Io { path: p, source }
+    };
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    if bytes.starts_with(b"glTF") {
+        return read_glb(&bytes);
+    }
+    let root: Value = serde_json::from_slice(&bytes)?;
+    let Some(found) = find(&root)? else {
+        return Ok(None);
+    };
+    let (buffer, off, len) = found.range;
+    let bpath = format!("/buffers/{buffer}/uri");
+    let uri = root
+        .pointer(&bpath)
+        .and_then(Value::as_str)
+        .ok_or_else(|| json_err(&bpath, "the stream's buffer has no uri"))?;
+    if uri.starts_with("data:") || uri.contains("://") {
+        return Err(json_err(&bpath, "only relative file URIs are supported"));
+    }
+    let file = path
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(percent_decode(uri));
+    let data = std::fs::read(&file).map_err(io(&file))?;
+    let data = slice(&data, off, len, found.buffer_view)?.to_vec();
+    Ok(Some((found, data)))
+}
+
+/// `%XX` escapes of a relative URI back to bytes.
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// One mesh's stream for [`embed`]: the chain's name as the writer used it
+/// (its level meshes are named `{name}_LOD{k}`, `k = 0` the finest), the
+/// stream, and the record count of each level, finest first.
+#[derive(Clone, Debug)]
+pub struct ChainStream {
+    pub name: String,
+    pub levels: Vec<usize>,
+    pub stream: Vec<u8>,
+}
+
+impl ChainStream {
+    /// The stream of one [`crate::lod::MeshBuild`]: its whole progressive
+    /// mesh (every primitive of the mesh, flattened) with its level split
+    /// counts, on the default 16-bit grid.
+    pub fn from_build(b: &crate::lod::MeshBuild) -> ChainStream {
+        let pm = &b.simplified.pm;
+        ChainStream {
+            name: b.lod.name.clone(),
+            levels: b.level_splits.clone(),
+            stream: lodgen_pm::stream::encode(
+                pm,
+                &b.level_splits,
+                lodgen_pm::stream::EncodeOptions::DEFAULT,
+            ),
+        }
+    }
+}
+
+/// Serialize a GLB from its JSON document and binary chunk.
+pub fn write_glb(root: &Value, bin: &[u8]) -> Result<Vec<u8>, ProgressiveError> {
+    let mut json = serde_json::to_vec(root)?;
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = u32::try_from(total).map_err(|_| ProgressiveError::Glb("over 4 GiB".into()))?;
+    let mut out = Vec::with_capacity(total as usize);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&total.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
+    out.extend_from_slice(&json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+        out.extend_from_slice(&bin);
+    }
+    Ok(out)
+}
+
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ProgressiveError> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|source| {
+            let _ = std::fs::remove_file(&tmp);
+            ProgressiveError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })
+}
+
+/// Add `LODGEN_progressive` to a `.glb` / `.gltf` the glTF writer has just
+/// written: each chain's stream goes on primitive 0 of its coarsest level's
+/// mesh (`{name}_LOD{levels.len() - 1}`), at the end of the GLB binary chunk,
+/// or for `.gltf` in `STEM.stream.bin` (`STEM.streamI.bin` when several
+/// meshes carry one). Files are replaced atomically; the result is a pure
+/// function of the inputs. A chain whose coarsest mesh is not found is an
+/// error (nothing is written).
+pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError> {
+    let io = |source| ProgressiveError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let bytes = std::fs::read(path).map_err(io)?;
+    let glb = bytes.starts_with(b"glTF");
+    let (mut root, mut bin) = if glb {
+        let (root, bin) = parse_glb(&bytes)?;
+        (root, bin.to_vec())
+    } else {
+        (serde_json::from_slice(&bytes)?, Vec::new())
+    };
+    let mut files = Vec::new();
+    for (i, c) in chains.iter().enumerate() {
+        let want = format!("{}_LOD{}", c.name, c.levels.len().saturating_sub(1));
+        let mesh = root
+            .get("meshes")
+            .and_then(Value::as_array)
+            .and_then(|m| {
+                m.iter()
+                    .position(|m| m.get("name").and_then(Value::as_str) == Some(&want))
+            })
+            .ok_or_else(|| json_err("/meshes", format!("no mesh named {want:?}")))?;
+        let placement = if glb {
+            Placement::Glb { bin: &mut bin }
+        } else {
+            let stem = path
+                .file_stem()
+                .map_or_else(|| "out".into(), |s| s.to_string_lossy().into_owned());
+            let name = if chains.len() == 1 {
+                format!("{stem}.stream.bin")
+            } else {
+                format!("{stem}.stream{i}.bin")
+            };
+            let uri: String = name
+                .bytes()
+                .map(|b| match b {
+                    b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'_' | b'.' | b'~' => {
+                        (b as char).to_string()
+                    }
+                    _ => format!("%{b:02X}"),
+                })
+                .collect();
+            files.push((path.with_file_name(&name), c.stream.clone()));
+            Placement::External { uri }
+        };
+        attach(&mut root, mesh, 0, &c.stream, &c.levels, placement)?;
+    }
+    for (p, data) in &files {
+        write_atomically(p, data)?;
+    }
+    let out = if glb {
+        write_glb(&root, &bin)?
+    } else {
+        let mut json = serde_json::to_vec_pretty(&root)?;
+        json.push(b'\n');
+        json
+    };
+    write_atomically(path, &out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc() -> Value {
+        json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": 8}],
+            "bufferViews": [{"buffer": 0, "byteLength": 8}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]},
+                       {"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "nodes": [{"mesh": 0, "extensions": {"MSFT_lod": {"ids": [1]}},
+                       "extras": {"MSFT_screencoverage": [0.5, 0.01]}},
+                      {"mesh": 1}],
+            "extensionsUsed": ["MSFT_lod"],
+        })
+    }
+
+    #[test]
+    fn attach_then_find_in_a_glb_chunk() {
+        let mut root = doc();
+        let mut bin = vec![1u8; 6];
+        let view = attach(
+            &mut root,
+            1,
+            0,
+            b"LGPMxyz",
+            &[9, 0],
+            Placement::Glb { bin: &mut bin },
+        )
+        .unwrap();
+        assert_eq!(view, 1);
+        assert_eq!(bin.len(), 16);
+        assert_eq!(&bin[8..15], b"LGPMxyz");
+        assert_eq!(root["buffers"][0]["byteLength"], 16);
+        assert_eq!(root["extensionsUsed"], json!(["MSFT_lod", EXTENSION]));
+        assert!(root.get("extensionsRequired").is_none());
+        let f = find(&root).unwrap().unwrap();
+        assert_eq!((f.mesh, f.primitive, f.buffer_view), (1, 0, 1));
+        assert_eq!(f.range, (0, 8, 7));
+        assert_eq!(f.levels, vec![9, 0]);
+        assert_eq!(f.lod_meshes, vec![0, 1]);
+        assert_eq!(f.screen_coverage, vec![0.5, 0.01]);
+    }
+
+    #[test]
+    fn attach_to_an_external_buffer() {
+        let mut root = doc();
+        attach(
+            &mut root,
+            1,
+            0,
+            b"abc",
+            &[0],
+            Placement::External {
+                uri: "x.stream.bin".into(),
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            root["buffers"][1],
+            json!({"byteLength": 3, "uri": "x.stream.bin"})
+        );
+        assert_eq!(
+            root["bufferViews"][1],
+            json!({"buffer": 1, "byteOffset": 0, "byteLength": 3})
+        );
+    }
+
+    #[test]
+    fn a_missing_primitive_is_an_error_and_changes_nothing() {
+        let mut root = doc();
+        let before = root.clone();
+        let mut bin = Vec::new();
+        assert!(attach(&mut root, 5, 0, b"x", &[], Placement::Glb { bin: &mut bin }).is_err());
+        assert_eq!(root, before);
+        assert!(bin.is_empty());
+    }
+
+    #[test]
+    fn bad_glb_is_an_error() {
+        assert!(parse_glb(b"glTF").is_err());
+        assert!(parse_glb(b"nope").is_err());
+        let mut v = b"glTF".to_vec();
+        v.extend_from_slice(&2u32.to_le_bytes());
+        v.extend_from_slice(&100u32.to_le_bytes());
+        v.extend_from_slice(&50u32.to_le_bytes());
+        v.extend_from_slice(&0x4E4F534Au32.to_le_bytes());
+        assert!(parse_glb(&v).is_err());
+    }
+
+    #[test]
+    fn percent_escapes_decode() {
+        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
+        assert_eq!(percent_decode("a%2"), "a%2");
+        assert_eq!(percent_decode("%zz"), "%zz");
+    }
+}

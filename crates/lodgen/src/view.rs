@@ -1,0 +1,424 @@
+//! `lodgen view FILE`: a local HTTP server (127.0.0.1 only, `tiny_http`)
+//! for the WebGL2 progressive-mesh viewer in `crates/lodgen/web/`.
+//!
+//! Owns loading what the viewer shows ([`ViewData`]: the split stream, its
+//! level table and screen coverage), the routes, and the per-level summary
+//! tests compare the browser against ([`ViewData::level_summary`]).
+//!
+//! Input: a glTF / GLB carrying `LODGEN_progressive` (see
+//! [`crate::progressive`]; `lodgen IN -o OUT.glb --progressive` writes one);
+//! or any mesh [`crate::io`] reads (a glTF without the extension too), run
+//! through an in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 /
+//! 2 %, stream-encoded.
+//!
+//! Routes: `/` (page), `/viewer.js`, `/info.json` (name, levels, coverage,
+//! stream size), `/stream.bin` (the stream, honouring single `Range:
+//! bytes=a-b` requests with 206 Partial Content so the page can fetch it in
+//! chunks).
+
+use crate::{cli, io, progressive};
+use anyhow::Context;
+use lodgen_pm::levels::{splits_for, LevelSpec};
+use lodgen_pm::stream::{decode, encode, EncodeOptions};
+use lodgen_pm::{simplify, ProgressiveMesh, SimplifyOptions};
+use serde_json::{json, Value};
+use std::io::Cursor as IoCursor;
+use std::path::Path;
+use std::sync::Arc;
+use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
+
+const INDEX_HTML: &str = include_str!("../web/index.html");
+const VIEWER_JS: &str = include_str!("../web/viewer.js");
+
+/// Bytes the page asks for per Range request unless `?chunk=` says
+/// otherwise: small enough that the bunny arrives in a few dozen steps.
+pub const DEFAULT_CHUNK: usize = 32 * 1024;
+
+/// Reference viewport of the screen-coverage model (the glTF writer's: a
+/// level may be drawn while its error projects to at most one pixel on a
+/// 1920 × 1080 screen, coverage = projected bounding-sphere area / screen
+/// area).
+const REFERENCE_PIXELS: f64 = 1920.0 * 1080.0;
+
+/// What the viewer shows.
+#[derive(Clone, Debug)]
+pub struct ViewData {
+    pub name: String,
+    /// The `LODGEN_progressive` stream.
+    pub stream: Vec<u8>,
+    /// Record count of each level, finest first (the `MSFT_lod` order).
+    pub levels: Vec<usize>,
+    /// `MSFT_screencoverage` values, finest first (may be empty).
+    pub screen_coverage: Vec<f64>,
+    /// `"gltf"` or `"pipeline"`.
+    pub source: &'static str,
+}
+
+/// FNV-1a (32 bit) over the indices as little-endian `u32`: the hash the
+/// page's `indexHash()` computes.
+pub fn index_hash(triangles: &[[u32; 3]]) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    for &i in triangles.iter().flatten() {
+        for b in i.to_le_bytes() {
+            h ^= u32::from(b);
+            h = h.wrapping_mul(0x0100_0193);
+        }
+    }
+    h
+}
+
+/// Largest coverage at which an error of `h` (fraction of the bounding-box
+/// diagonal) stays within one reference pixel: `π / (4 N h²)`.
+fn coverage_for_error(h: f64) -> f64 {
+    if h.is_nan() || h <= 0.0 {
+        return f64::INFINITY;
+    }
+    std::f64::consts::PI / (4.0 * REFERENCE_PIXELS * h * h)
+}
+
+/// Screen coverage per level (finest first) from the recorded split
+/// errors: level k's error is the largest error among the splits it lacks;
+/// `s[k] = C(h[k+1])`, the last value the cull threshold `C(1)`; clamped to
+/// `[0, 1]`, non-increasing.
+fn pipeline_coverage(pm: &ProgressiveMesh, levels: &[usize], diagonal: f64) -> Vec<f64> {
+    let mut suffix = vec![0.0f64; pm.len() + 1];
+    for k in (0..pm.len()).rev() {
+        suffix[k] = suffix[k + 1].max(f64::from(pm.splits[k].error));
+    }
+    let h: Vec<f64> = levels
+        .iter()
+        .map(|&k| suffix[k.min(pm.len())] / diagonal.max(f64::MIN_POSITIVE))
+        .collect();
+    let mut out: Vec<f64> = (0..h.len())
+        .map(|k| {
+            h.get(k + 1)
+                .map_or(coverage_for_error(1.0), |&x| coverage_for_error(x))
+        })
+        .map(|c| c.clamp(0.0, 1.0))
+        .collect();
+    for k in 1..out.len() {
+        out[k] = out[k].min(out[k - 1]);
+    }
+    out
+}
+
+impl ViewData {
+    /// Load `path`: a glTF/GLB with `LODGEN_progressive`, or any readable
+    /// mesh through the in-memory pipeline.
+    pub fn load(path: &Path) -> anyhow::Result<ViewData> {
+        let name = path
+            .file_name()
+            .map_or_else(|| "mesh".into(), |n| n.to_string_lossy().into_owned());
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if ext == "glb" || ext == "gltf" {
+            let found = progressive::read_file(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            if let Some((found, stream)) = found {
+                decode(&stream)
+                    .with_context(|| format!("{}: decoding the stream", path.display()))?;
+                return Ok(ViewData {
+                    name,
+                    stream,
+                    levels: found.levels,
+                    screen_coverage: found.screen_coverage,
+                    source: "gltf",
+                });
+            }
+        }
+        // any other mesh (or a glTF without the extension): the pipeline, on
+        // every mesh the file's scene draws, merged
+        let scene = io::read_scene(path).with_context(|| format!("reading {}", path.display()))?;
+        let mesh = cli::merged_mesh(&scene);
+        Self::from_mesh(name, &mesh.positions, &mesh.indices())
+    }
+
+    /// The in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 / 2 %
+    /// (finest first), 16-bit stream.
+    pub fn from_mesh(
+        name: String,
+        positions: &[[f32; 3]],
+        indices: &[u32],
+    ) -> anyhow::Result<ViewData> {
+        let ratios = [1.0, 0.5, 0.1, 0.02];
+        let out = simplify(
+            positions,
+            indices,
+            &SimplifyOptions::DEFAULT.with_target_ratio(ratios[3]),
+        )
+        .with_context(|| format!("simplifying {name}"))?;
+        let pm = out.pm;
+        let levels: Vec<usize> = ratios
+            .iter()
+            .map(|&r| splits_for(&pm, LevelSpec::Ratio(r)))
+            .collect();
+        let diagonal = pm.mesh_at_splits(pm.len()).diagonal();
+        let screen_coverage = pipeline_coverage(&pm, &levels, diagonal);
+        let stream = encode(&pm, &levels, EncodeOptions::DEFAULT);
+        Ok(ViewData {
+            name,
+            stream,
+            levels,
+            screen_coverage,
+            source: "pipeline",
+        })
+    }
+
+    /// Per level (finest first): record count, triangle and vertex counts
+    /// and the [`index_hash`] of the mesh the page must show after that many
+    /// records. What `lodgen view --print-levels` prints and the browser
+    /// test asserts.
+    pub fn level_summary(&self) -> anyhow::Result<Value> {
+        let (pm, _) = decode(&self.stream).context("decoding the stream")?;
+        let levels: Vec<Value> = self
+            .levels
+            .iter()
+            .map(|&k| {
+                let m = pm.mesh_at_splits(k);
+                json!({
+                    "records": k,
+                    "triangles": m.triangles.len(),
+                    "vertices": m.positions.len(),
+                    "indexHash": index_hash(&m.triangles),
+                })
+            })
+            .collect();
+        Ok(json!({
+            "name": self.name,
+            "splits": pm.len(),
+            "streamBytes": self.stream.len(),
+            "levels": levels,
+        }))
+    }
+
+    fn info(&self) -> Value {
+        json!({
+            "name": self.name,
+            "source": self.source,
+            "levels": self.levels,
+            "screenCoverage": self.screen_coverage,
+            "streamBytes": self.stream.len(),
+            "chunkBytes": DEFAULT_CHUNK,
+        })
+    }
+}
+
+/// A bound server; [`ViewServer::run`] answers until [`ViewServer::stop`].
+pub struct ViewServer {
+    server: Arc<Server>,
+    data: Arc<ViewData>,
+    port: u16,
+}
+
+impl ViewServer {
+    /// Bind 127.0.0.1:`port` (0 = any free port).
+    pub fn bind(data: ViewData, port: u16) -> anyhow::Result<ViewServer> {
+        let server = Server::http(("127.0.0.1", port))
+            .map_err(|e| anyhow::anyhow!("binding 127.0.0.1:{port}: {e}"))?;
+        let port = server
+            .server_addr()
+            .to_ip()
+            .map(|a| a.port())
+            .context("the server has no IP address")?;
+        Ok(ViewServer {
+            server: Arc::new(server),
+            data: Arc::new(data),
+            port,
+        })
+    }
+
+    pub fn port(&self) -> u16 {
+        self.port
+    }
+
+    pub fn url(&self) -> String {
+        format!("http://127.0.0.1:{}/", self.port)
+    }
+
+    /// A handle that stops [`ViewServer::run`] from another thread.
+    pub fn stopper(&self) -> Stopper {
+        Stopper(Arc::clone(&self.server))
+    }
+
+    /// Answer requests until stopped.
+    pub fn run(&self) {
+        for request in self.server.incoming_requests() {
+            // a client that hung up is not the server's problem
+            let _ = respond(&self.data, request);
+        }
+    }
+}
+
+/// Stops a running [`ViewServer`].
+#[derive(Clone)]
+pub struct Stopper(Arc<Server>);
+
+impl Stopper {
+    pub fn stop(&self) {
+        self.0.unblock();
+    }
+}
+
+/// Add `Name: value` headers (malformed ones, which the constants and
+/// numbers used here never are, are skipped rather than panicking).
+fn with_headers<R: std::io::Read>(mut r: Response<R>, headers: &[String]) -> Response<R> {
+    for h in headers {
+        if let Ok(h) = h.parse::<Header>() {
+            r.add_header(h);
+        }
+    }
+    r
+}
+
+/// Parse a single `bytes=a-b`, `bytes=a-` or `bytes=-n` range against a body
+/// of `len` bytes: `Some(Ok(start..end))`, `Some(Err(()))` when
+/// unsatisfiable, `None` to serve the whole body (absent or multi-range).
+fn parse_range(value: &str, len: usize) -> Option<Result<std::ops::Range<usize>, ()>> {
+    let spec = value.trim().strip_prefix("bytes=")?;
+    if spec.contains(',') {
+        return None;
+    }
+    let (a, b) = spec.split_once('-')?;
+    let (a, b) = (a.trim(), b.trim());
+    let range = if a.is_empty() {
+        let n: usize = b.parse().ok()?;
+        len.saturating_sub(n)..len
+    } else {
+        let start: usize = a.parse().ok()?;
+        let end = if b.is_empty() {
+            len
+        } else {
+            b.parse::<usize>().ok()?.saturating_add(1).min(len)
+        };
+        start..end
+    };
+    Some(if range.start < range.end {
+        Ok(range)
+    } else {
+        Err(())
+    })
+}
+
+fn respond(data: &ViewData, request: Request) -> std::io::Result<()> {
+    if *request.method() != Method::Get && *request.method() != Method::Head {
+        return request.respond(Response::from_string("method not allowed").with_status_code(405));
+    }
+    let path = request.url().split('?').next().unwrap_or("/").to_string();
+    let (body, kind): (Vec<u8>, &str) = match path.as_str() {
+        "/" | "/index.html" => (INDEX_HTML.as_bytes().to_vec(), "text/html; charset=utf-8"),
+        "/viewer.js" => (
+            VIEWER_JS.as_bytes().to_vec(),
+            "text/javascript; charset=utf-8",
+        ),
+        "/info.json" => (data.info().to_string().into_bytes(), "application/json"),
+        "/stream.bin" => {
+            let len = data.stream.len();
+            let range = request
+                .headers()
+                .iter()
+                .find(|h| h.field.equiv("Range"))
+                .and_then(|h| parse_range(h.value.as_str(), len));
+            return match range {
+                Some(Ok(r)) => {
+                    let part = data.stream[r.clone()].to_vec();
+                    let n = part.len();
+                    let resp = Response::new(
+                        StatusCode(206),
+                        Vec::new(),
+                        IoCursor::new(part),
+                        Some(n),
+                        None,
+                    );
+                    request.respond(with_headers(
+                        resp,
+                        &[
+                            "Content-Type: application/octet-stream".into(),
+                            format!("Content-Range: bytes {}-{}/{len}", r.start, r.end - 1),
+                            "Accept-Ranges: bytes".into(),
+                            "Cache-Control: no-store".into(),
+                        ],
+                    ))
+                }
+                Some(Err(())) => request.respond(with_headers(
+                    Response::from_string("range not satisfiable").with_status_code(416),
+                    &[format!("Content-Range: bytes */{len}")],
+                )),
+                None => request.respond(with_headers(
+                    Response::from_data(data.stream.clone()),
+                    &[
+                        "Content-Type: application/octet-stream".into(),
+                        "Accept-Ranges: bytes".into(),
+                        "Cache-Control: no-store".into(),
+                    ],
+                )),
+            };
+        }
+        // browsers ask for it unprompted: answer "no icon", not an error
+        "/favicon.ico" => return request.respond(Response::empty(204)),
+        _ => return request.respond(Response::from_string("not found").with_status_code(404)),
+    };
+    request.respond(with_headers(
+        Response::from_data(body),
+        &[
+            format!("Content-Type: {kind}"),
+            "Cache-Control: no-store".into(),
+        ],
+    ))
+}
+
+/// `lodgen view FILE --port N`: load, bind 127.0.0.1, print the URL to
+/// stderr and serve until the process ends.
+pub fn serve(path: &Path, port: u16) -> anyhow::Result<()> {
+    let data = ViewData::load(path)?;
+    let server = ViewServer::bind(data, port)?;
+    eprintln!(
+        "lodgen view: serving {} on {}",
+        path.display(),
+        server.url()
+    );
+    server.run();
+    Ok(())
+}
+
+/// `lodgen view --print-levels FILE`: the [`ViewData::level_summary`] JSON.
+pub fn print_levels(path: &Path) -> anyhow::Result<String> {
+    let data = ViewData::load(path)?;
+    Ok(serde_json::to_string_pretty(&data.level_summary()?)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_parse_like_rfc_9110() {
+        assert_eq!(parse_range("bytes=0-9", 100), Some(Ok(0..10)));
+        assert_eq!(parse_range("bytes=90-", 100), Some(Ok(90..100)));
+        assert_eq!(parse_range("bytes=-5", 100), Some(Ok(95..100)));
+        assert_eq!(parse_range("bytes=50-500", 100), Some(Ok(50..100)));
+        assert_eq!(parse_range("bytes=100-", 100), Some(Err(())));
+        assert_eq!(parse_range("bytes=0-1,5-6", 100), None);
+        assert_eq!(parse_range("items=0-1", 100), None);
+        assert_eq!(parse_range("bytes=x-1", 100), None);
+    }
+
+    #[test]
+    fn fnv_matches_the_reference_values() {
+        // FNV-1a 32 of the empty input and of the bytes 00 00 00 00
+        assert_eq!(index_hash(&[]), 0x811c_9dc5);
+        let mut h: u32 = 0x811c_9dc5;
+        for _ in 0..12 {
+            h = h.wrapping_mul(0x0100_0193);
+        }
+        assert_eq!(index_hash(&[[0, 0, 0]]), h);
+    }
+
+    #[test]
+    fn coverage_follows_the_one_pixel_model() {
+        // C(h) = π / (4 N h²); h = 0.001 → 0.3788 (the writer's worked example)
+        assert!((coverage_for_error(0.001) - std::f64::consts::PI / 8.2944).abs() < 1e-9);
+        assert_eq!(coverage_for_error(0.0), f64::INFINITY);
+    }
+}

@@ -1,0 +1,106 @@
+//! The viewer page in headless Chromium (`tests/js/viewer.mjs`): serves the
+//! bunny (or, without the shared asset, a noisy torus knot) through the
+//! in-memory pipeline, writes the expected per-level triangle counts and
+//! index hashes, and runs the script, which checks the page against them and
+//! writes `target/test-out/viewer-*.png`.
+//!
+//! `LODGEN_VIEW_FILE=path` serves that file instead (e.g. a `.glb` written
+//! with `--progressive`).
+//!
+//! Needs `node`, Chromium (`/usr/bin/chromium` or `LODGEN_CHROMIUM`) and
+//! `tests/js/node_modules/playwright-core`. Without them the test says so and
+//! passes, unless `LODGEN_BROWSER_TEST=1` (as in `.ci/run`) makes their
+//! absence a failure.
+
+use lodgen::view::{ViewData, ViewServer};
+use lodgen_pm::shapes::torus_knot;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn missing_tools() -> Vec<String> {
+    let mut missing = Vec::new();
+    if Command::new("node").arg("--version").output().is_err() {
+        missing.push("node".to_string());
+    }
+    let chromium = std::env::var("LODGEN_CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    if !std::path::Path::new(&chromium).exists() {
+        missing.push(chromium);
+    }
+    let pw = root().join("tests/js/node_modules/playwright-core");
+    if !pw.exists() {
+        missing.push(format!("{} (npm install in tests/js)", pw.display()));
+    }
+    missing
+}
+
+#[test]
+fn viewer_page_matches_levels_in_headless_chromium() {
+    let missing = missing_tools();
+    if !missing.is_empty() {
+        let required = std::env::var("LODGEN_BROWSER_TEST").is_ok_and(|v| v == "1");
+        assert!(!required, "LODGEN_BROWSER_TEST=1 but missing: {missing:?}");
+        eprintln!("browser test skipped, missing: {missing:?}");
+        return;
+    }
+    let bunny = PathBuf::from("/work/shared/assets/bunny.obj");
+    // LODGEN_VIEW_FILE: any file `lodgen view` accepts (e.g. a `.glb`
+    // written with --progressive) instead of the bunny
+    let data = if let Some(file) = std::env::var_os("LODGEN_VIEW_FILE") {
+        ViewData::load(std::path::Path::new(&file)).unwrap()
+    } else if bunny.exists() {
+        ViewData::load(&bunny).unwrap()
+    } else {
+        let m = torus_knot(2, 3, 300, 24, 0.02);
+        ViewData::from_mesh("torus knot".into(), &m.positions, &m.indices()).unwrap()
+    };
+    let out = root().join("target/test-out");
+    std::fs::create_dir_all(&out).unwrap();
+    // stale screenshots must not satisfy the count below
+    for e in std::fs::read_dir(&out).unwrap().filter_map(Result::ok) {
+        let n = e.file_name().to_string_lossy().into_owned();
+        if n.starts_with("viewer-L") && n.ends_with(".png") {
+            std::fs::remove_file(e.path()).unwrap();
+        }
+    }
+    let expect = out.join("viewer-expect.json");
+    std::fs::write(&expect, data.level_summary().unwrap().to_string()).unwrap();
+
+    let server = ViewServer::bind(data, 0).unwrap();
+    let url = server.url();
+    let stop = server.stopper();
+    let thread = std::thread::spawn(move || server.run());
+    let result = Command::new("node")
+        .arg(root().join("tests/js/viewer.mjs"))
+        .args(["--url", &url, "--expect"])
+        .arg(&expect)
+        .arg("--out")
+        .arg(&out)
+        .output();
+    stop.stop();
+    thread.join().unwrap();
+    let result = result.expect("running node");
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&result.stdout),
+        String::from_utf8_lossy(&result.stderr)
+    );
+    eprintln!("{log}");
+    assert!(result.status.success(), "viewer.mjs failed:\n{log}");
+    let shots = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            n.starts_with("viewer-L") && n.ends_with(".png")
+        })
+        .count();
+    assert!(
+        shots >= 3,
+        "expected three screenshots in {}",
+        out.display()
+    );
+}
