@@ -9,7 +9,8 @@ use lodgen_pm::pairs::{edges, near_pairs, near_pairs_brute_force};
 use lodgen_pm::shapes::{grid, icosphere, torus};
 use lodgen_pm::{prepare, simplify, Mesh, ProgressiveMesh, Simplifier, SimplifyOptions, Tau};
 use proptest::prelude::*;
-use std::path::PathBuf;
+
+mod common;
 
 fn normal(m: &Mesh, t: [u32; 3]) -> [f64; 3] {
     let p = t.map(|v| m.positions[v as usize].map(f64::from));
@@ -165,53 +166,12 @@ proptest! {
     }
 }
 
-fn shared_assets() -> Option<PathBuf> {
-    let dir = std::env::var_os("LODGEN_ASSETS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets")
-        });
-    if dir.join("cow.obj").exists() {
-        Some(dir)
-    } else if std::env::var("CI").as_deref() == Ok("true") {
-        panic!("test meshes missing: {} (set LODGEN_ASSETS)", dir.display());
-    } else {
-        eprintln!(
-            "notice: {} not found; skipping the test on real meshes",
-            dir.display()
-        );
-        None
-    }
-}
-
-/// `v`/`f` lines only: enough for the shared test meshes.
-fn read_obj(text: &str) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let (mut p, mut idx) = (Vec::new(), Vec::new());
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f32> = it.take(3).map(|x| x.parse().unwrap()).collect();
-                p.push([c[0], c[1], c[2]]);
-            }
-            Some("f") => {
-                let f: Vec<u32> = it
-                    .map(|x| x.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..f.len() - 1 {
-                    idx.extend_from_slice(&[f[0], f[k], f[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    (p, idx)
-}
-
 #[test]
 fn cow_simplifies_cleanly_and_replays_exactly() {
-    let Some(dir) = shared_assets() else { return };
-    let (p, idx) = read_obj(&std::fs::read_to_string(dir.join("cow.obj")).unwrap());
+    let Some(text) = common::shared_asset_text("cow.obj") else {
+        return;
+    };
+    let (p, idx) = common::read_obj(&text);
     let welded = prepare(&p, &idx).unwrap();
     assert_eq!(welded.mesh.triangles.len(), 5804);
     for ratio in [0.5, 0.1, 0.02] {

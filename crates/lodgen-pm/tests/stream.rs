@@ -3,6 +3,7 @@
 //! (never panics) on random and truncated bytes, and the size target on the
 //! bunny.
 
+mod common;
 use lodgen_pm::shapes::{cube, grid, icosphere, torus_knot};
 use lodgen_pm::stream::{decode, decode_header, encode, EncodeOptions, StreamDecoder, StreamError};
 use lodgen_pm::{simplify, Mesh, ProgressiveMesh, SimplifyOptions, Tau};
@@ -247,40 +248,14 @@ proptest! {
     }
 }
 
-/// Parse `v` and `f` lines (polygons fanned) of an OBJ.
-fn read_obj(text: &str) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f32> = it.take(3).map(|x| x.parse().unwrap()).collect();
-                positions.push([c[0], c[1], c[2]]);
-            }
-            Some("f") => {
-                let f: Vec<u32> = it
-                    .map(|x| x.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for i in 1..f.len() - 1 {
-                    indices.extend_from_slice(&[f[0], f[i], f[i + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    (positions, indices)
-}
-
 /// The size figures of the issue, on the bunny (skipped when the shared
 /// asset is absent). Run with `--nocapture` to see them.
 #[test]
 fn bunny_stream_is_within_the_size_target() {
-    let Ok(text) = std::fs::read_to_string("/work/shared/assets/bunny.obj") else {
-        eprintln!("bunny.obj not found: skipped");
+    let Some(text) = common::shared_asset_text("bunny.obj") else {
         return;
     };
-    let (positions, indices) = read_obj(&text);
+    let (positions, indices) = common::read_obj(&text);
     let out = simplify(
         &positions,
         &indices,

@@ -18,6 +18,7 @@ use std::process::ExitCode;
 ///   lodgen scan.ply --max-error 0.1%,0.5%,2% --report scan.json
 ///   lodgen inspect bunny.glb
 ///   lodgen measure bunny.obj bunny.glb
+///   lodgen bunny.obj --progressive -o bunny.glb && lodgen view bunny.glb
 #[derive(Parser, Debug)]
 #[command(name = "lodgen", version, verbatim_doc_comment)]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
@@ -41,6 +42,22 @@ enum Command {
     /// sided and symmetric Hausdorff, mean and RMS, absolute and in % of A's
     /// bounding-box diagonal. For a LOD file, its finest level is used.
     Measure(MeasureArgs),
+    /// Serve a WebGL2 viewer on 127.0.0.1 that shows the coarsest level and
+    /// streams the vertex-split log (LODGEN_progressive) to refine it, with a
+    /// level slider, a triangle counter, orbit controls and a mode that
+    /// switches MSFT_lod levels by screen coverage. FILE is a lodgen output
+    /// written with --progressive, or any readable mesh (simplified in
+    /// memory first).
+    View {
+        /// A .glb/.gltf with LODGEN_progressive, or any mesh lodgen reads.
+        file: PathBuf,
+        /// TCP port on 127.0.0.1 (0 = any free port).
+        #[arg(long, default_value_t = 8080)]
+        port: u16,
+        /// Print the per-level record counts and triangle counts, then exit.
+        #[arg(long)]
+        print_levels: bool,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -64,6 +81,16 @@ fn main() -> ExitCode {
             .with_context(|| format!("inspecting {}", file.display()))
             .map(|r| print!("{r}")),
         Some(Command::Measure(m)) => cli::measure_files(&m.a, &m.b, m.samples, m.json),
+        Some(Command::View {
+            file,
+            port,
+            print_levels,
+        }) => if print_levels {
+            lodgen::view::print_levels(&file).map(|s| println!("{s}"))
+        } else {
+            lodgen::view::serve(&file, port)
+        }
+        .with_context(|| format!("viewing {}", file.display())),
         None => run_build(cli.build),
     };
     match result {
