@@ -22,6 +22,7 @@
 //! levels.
 
 pub mod collapse;
+pub mod curvature;
 pub mod levels;
 pub mod mesh;
 pub mod options;
@@ -31,6 +32,10 @@ pub mod shapes;
 pub mod vsplit;
 
 pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
+pub use curvature::{
+    simplify_adaptive, simplify_method, Adaptive, AdaptiveOptions, AdaptiveReport, AdaptiveStop,
+    Method, Reclassify, Threshold,
+};
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use options::{Boundary, Placement, SimplifyOptions, Tau};
