@@ -244,7 +244,7 @@ pub enum AdaptiveStop {
     /// Candidates remained, but every operation on them was illegal or had
     /// to be rolled back.
     Illegal,
-    /// A QEM method stopped with this core reason.
+    /// A QEM method stopped early with this core reason.
     Qem(StopReason),
 }
 
@@ -584,7 +584,10 @@ pub fn simplify_method(
             let (pm, stats) = s.finish();
             let report = AdaptiveReport {
                 method,
-                stop: AdaptiveStop::Qem(stop),
+                stop: match stop {
+                    StopReason::Target => AdaptiveStop::Target,
+                    r => AdaptiveStop::Qem(r),
+                },
                 sweeps: 0,
                 operations: stats.collapses,
                 threshold: theta_max,
@@ -795,7 +798,8 @@ impl Engine {
                     let r = self.tris[t].map(|v| removable[v as usize]);
                     match self.method {
                         Method::Triangle => r.iter().all(|&x| x),
-                        _ => (r[0] && r[1]) || (r[1] && r[2]) || (r[2] && r[0]),
+                        // two removable corners make a removable edge
+                        _ => r.iter().filter(|&&x| x).count() >= 2,
                     }
                 })
                 .map(|t| (key(&self.tris[t]), t as u32))
