@@ -21,9 +21,11 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
+pub mod bvh;
 pub mod collapse;
 pub mod curvature;
 pub mod levels;
+pub mod measure;
 pub mod mesh;
 pub mod options;
 pub mod pairs;

@@ -1,0 +1,554 @@
+//! Tests of the error metric (`lodgen_pm::measure`) and its closest-point hierarchy
+//! (`lodgen_pm::bvh`): exact cases worked out by hand, the hierarchy against brute force, and
+//! determinism.
+
+use lodgen_pm::bvh::{closest_point_on_triangle, distance_squared, TriangleBvh};
+use lodgen_pm::measure::{
+    measure, one_sided, Distance, MeasureError, MeasureOptions, MeshError, MeshRef,
+};
+use proptest::prelude::*;
+
+/// An owned mesh for the tests.
+#[derive(Clone, Debug)]
+struct Mesh {
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    fn r(&self) -> MeshRef<'_> {
+        MeshRef::new(&self.positions, &self.triangles)
+    }
+
+    fn translated(&self, t: [f32; 3]) -> Mesh {
+        Mesh {
+            positions: self
+                .positions
+                .iter()
+                .map(|p| [p[0] + t[0], p[1] + t[1], p[2] + t[2]])
+                .collect(),
+            triangles: self.triangles.clone(),
+        }
+    }
+}
+
+/// An `n`×`n`-cell grid over the unit square, height `z(x, y)`.
+fn grid(n: u32, z: impl Fn(f32, f32) -> f32) -> Mesh {
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            positions.push([x, y, z(x, y)]);
+        }
+    }
+    let mut triangles = Vec::new();
+    let v = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// The cube [-h, h]³ as 12 outward-facing triangles.
+fn cube(h: f32) -> Mesh {
+    let positions = (0..8)
+        .map(|i| {
+            let s = |bit: u32| if i & bit != 0 { h } else { -h };
+            [s(1), s(2), s(4)]
+        })
+        .collect();
+    let quads = [
+        [0, 2, 3, 1], // z = -h
+        [4, 5, 7, 6], // z = +h
+        [0, 1, 5, 4], // y = -h
+        [2, 6, 7, 3], // y = +h
+        [0, 4, 6, 2], // x = -h
+        [1, 3, 7, 5], // x = +h
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+fn bumpy(n: u32) -> Mesh {
+    grid(n, |x, y| 0.1 * (6.0 * x).sin() * (5.0 * y).cos())
+}
+
+fn assert_close(actual: f64, expected: f64, tol: f64, what: &str) {
+    assert!(
+        (actual - expected).abs() <= tol,
+        "{what}: {actual} differs from {expected} by more than {tol}"
+    );
+}
+
+// ---------------------------------------------------------------- point–triangle distance
+
+#[test]
+fn closest_point_on_triangle_in_every_voronoi_region() {
+    let (a, b, c) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let cases: [([f64; 3], [f64; 3]); 8] = [
+        ([-1.0, -1.0, 0.5], a),                // vertex A
+        ([2.0, -0.5, -1.0], b),                // vertex B
+        ([-0.5, 2.0, 3.0], c),                 // vertex C
+        ([0.25, -2.0, 0.0], [0.25, 0.0, 0.0]), // edge AB
+        ([-3.0, 0.75, 1.0], [0.0, 0.75, 0.0]), // edge AC
+        ([1.0, 1.0, 0.0], [0.5, 0.5, 0.0]),    // edge BC
+        ([0.2, 0.3, 5.0], [0.2, 0.3, 0.0]),    // face, above
+        ([0.1, 0.1, -2.0], [0.1, 0.1, 0.0]),   // face, below
+    ];
+    for (p, want) in cases {
+        let q = closest_point_on_triangle(p, a, b, c);
+        assert!(
+            distance_squared(q, want) < 1e-24,
+            "closest point to {p:?} is {q:?}, expected {want:?}"
+        );
+    }
+}
+
+#[test]
+fn closest_point_on_degenerate_triangles_is_on_the_segment_or_point() {
+    // Collinear corners: the triangle is the segment from (0,0,0) to (2,0,0).
+    let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
+    let q = closest_point_on_triangle([1.5, 3.0, 4.0], a, b, c);
+    assert!(distance_squared(q, [1.5, 0.0, 0.0]) < 1e-24, "{q:?}");
+    let q = closest_point_on_triangle([-1.0, 1.0, 0.0], a, b, c);
+    assert!(distance_squared(q, a) < 1e-24, "{q:?}");
+    // Two equal corners.
+    let q = closest_point_on_triangle([0.5, 1.0, 0.0], a, a, b);
+    assert!(distance_squared(q, [0.5, 0.0, 0.0]) < 1e-24, "{q:?}");
+    // All corners equal.
+    let p = [1.0, 1.0, 1.0];
+    let q = closest_point_on_triangle([5.0, 0.0, 0.0], p, p, p);
+    assert_eq!(q, p);
+}
+
+fn coord() -> impl Strategy<Value = f32> {
+    // A coarse lattice makes coincident and collinear corners (degenerate triangles) common.
+    prop_oneof![(-4i32..=4).prop_map(|i| i as f32 * 0.5), -2.0f32..2.0]
+}
+
+fn point3() -> impl Strategy<Value = [f32; 3]> {
+    [coord(), coord(), coord()]
+}
+
+proptest! {
+    /// The answer lies in the triangle and no point of a fine barycentric lattice on the
+    /// triangle is closer.
+    #[test]
+    fn closest_point_beats_a_barycentric_lattice(
+        a in point3(), b in point3(), c in point3(), p in point3()
+    ) {
+        let w = |x: [f32; 3]| x.map(f64::from);
+        let (a, b, c, p) = (w(a), w(b), w(c), w(p));
+        let q = closest_point_on_triangle(p, a, b, c);
+        let d2 = distance_squared(p, q);
+        const N: usize = 40;
+        let mut lattice_best = f64::INFINITY;
+        for i in 0..=N {
+            for j in 0..=N - i {
+                let (u, v) = (i as f64 / N as f64, j as f64 / N as f64);
+                let x = std::array::from_fn(|k| a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]));
+                lattice_best = lattice_best.min(distance_squared(p, x));
+            }
+        }
+        prop_assert!(d2 <= lattice_best + 1e-9, "{d2} > lattice {lattice_best}");
+        // q is in the triangle: its distance to the triangle is 0.
+        let back = closest_point_on_triangle(q, a, b, c);
+        prop_assert!(distance_squared(q, back) <= 1e-18, "{q:?} not on the triangle");
+    }
+
+    /// The hierarchy returns the same squared distance as trying every triangle, and its
+    /// triangle and point are consistent with that distance.
+    #[test]
+    fn bvh_matches_brute_force(
+        positions in prop::collection::vec(point3(), 3..60),
+        raw in prop::collection::vec([any::<u32>(), any::<u32>(), any::<u32>()], 1..120),
+        points in prop::collection::vec(point3(), 1..30),
+    ) {
+        let nv = positions.len() as u32;
+        let triangles: Vec<[u32; 3]> = raw.iter().map(|t| t.map(|i| i % nv)).collect();
+        let mesh = MeshRef::new(&positions, &triangles);
+        let bvh = TriangleBvh::new(mesh).unwrap();
+        prop_assert_eq!(bvh.len(), triangles.len());
+        let corner = |t: [u32; 3]| t.map(|v| positions[v as usize].map(f64::from));
+        for p in points {
+            let p = p.map(f64::from);
+            let brute = triangles
+                .iter()
+                .map(|&t| {
+                    let [a, b, c] = corner(t);
+                    distance_squared(p, closest_point_on_triangle(p, a, b, c))
+                })
+                .fold(f64::INFINITY, f64::min);
+            let (d2, t, q) = bvh.closest_point(p).unwrap();
+            prop_assert!((d2 - brute).abs() <= 1e-12 * (1.0 + brute), "bvh {d2}, brute {brute}");
+            let [a, b, c] = corner(triangles[t as usize]);
+            prop_assert_eq!(q, closest_point_on_triangle(p, a, b, c));
+            prop_assert_eq!(d2, distance_squared(p, q));
+        }
+    }
+}
+
+#[test]
+fn empty_bvh_answers_none() {
+    let bvh = TriangleBvh::new(MeshRef::new(&[[0.0; 3]], &[])).unwrap();
+    assert!(bvh.is_empty());
+    assert_eq!(bvh.closest_point([1.0, 2.0, 3.0]), None);
+}
+
+// ---------------------------------------------------------------- the metric, exact cases
+
+#[test]
+fn plane_against_plane_shifted_by_d_is_d_everywhere() {
+    let d = 0.037f32;
+    let a = grid(10, |_, _| 0.0);
+    let b = grid(7, |_, _| d); // a different triangulation of the same shifted square
+    let r = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
+    let d = f64::from(d);
+    for (dist, what) in [(r.a_to_b, "A→B"), (r.b_to_a, "B→A")] {
+        assert_close(dist.max, d, 1e-6, what);
+        assert_close(dist.mean, d, 1e-6, what);
+        assert_close(dist.rms, d, 1e-6, what);
+    }
+    assert_close(r.hausdorff(), d, 1e-6, "Hausdorff");
+    assert_close(r.rms(), d, 1e-6, "RMS");
+    assert_close(r.diagonal, 2f64.sqrt(), 1e-12, "diagonal");
+    assert_close(
+        r.hausdorff_percent(),
+        100.0 * d / 2f64.sqrt(),
+        1e-4,
+        "Hausdorff %",
+    );
+    assert_close(r.rms_percent(), 100.0 * d / 2f64.sqrt(), 1e-4, "RMS %");
+}
+
+#[test]
+fn mesh_against_itself_is_zero() {
+    let m = bumpy(30);
+    let r = measure(m.r(), m.r(), &MeasureOptions::DEFAULT).unwrap();
+    assert!(r.hausdorff() < 1e-9, "{r:?}");
+    assert!(r.rms() < 1e-9, "{r:?}");
+    // Samples: max(10_000, 2 × 1800) area samples plus the 961 vertices, each way.
+    assert_eq!(r.a_to_b.samples, 10_000 + 961);
+    assert_eq!(r.b_to_a.samples, 10_000 + 961);
+}
+
+/// A = cube of half-size 0.5, B = concentric cube of half-size g = 0.4 (as f32).
+///
+/// A→B: a point of A's face z = 0.5 is outside B, so its distance to B's surface is its
+/// distance to the solid box: √(dx² + dy² + (0.5 − g)²) with dx = max(|x| − g, 0). Largest at
+/// A's corners: √3 (0.5 − g). Mean square over the face (side 1):
+/// (0.5−g)² + 2·∫ max(|x|−g, 0)² dx = (0.5−g)² + 2·(2 (0.5−g)³ / 3).
+/// B→A: a point of B's surface has every |coordinate| ≤ g, so its nearest face of A is at
+/// 0.5 − g, exactly, everywhere.
+#[test]
+fn cube_against_smaller_concentric_cube() {
+    let a = cube(0.5);
+    let b = cube(0.4);
+    let opts = MeasureOptions::DEFAULT.with_min_samples(100_000);
+    let r = measure(a.r(), b.r(), &opts).unwrap();
+    let e = 0.5 - f64::from(0.4f32);
+    let g = f64::from(0.4f32);
+
+    assert_close(r.a_to_b.max, 3f64.sqrt() * e, 1e-9, "A→B max (corner)");
+    let ms = e * e + 2.0 * (2.0 * e.powi(3) / 3.0);
+    assert_close(r.a_to_b.rms, ms.sqrt(), 2e-3 * ms.sqrt(), "A→B RMS");
+    // Mean by midpoint quadrature over one face (all six are alike).
+    const Q: usize = 2000;
+    let excess = |i: usize| ((i as f64 + 0.5) / Q as f64 - 0.5).abs() - g;
+    let mut sum = 0.0;
+    for i in 0..Q {
+        let dx = excess(i).max(0.0);
+        for j in 0..Q {
+            let dy = excess(j).max(0.0);
+            sum += (dx * dx + dy * dy + e * e).sqrt();
+        }
+    }
+    let mean = sum / (Q * Q) as f64;
+    assert_close(r.a_to_b.mean, mean, 2e-3 * mean, "A→B mean");
+    assert!(
+        r.a_to_b.mean > e * 1.001,
+        "the corners must raise the mean above {e}"
+    );
+
+    for (v, what) in [
+        (r.b_to_a.max, "B→A max"),
+        (r.b_to_a.mean, "B→A mean"),
+        (r.b_to_a.rms, "B→A RMS"),
+    ] {
+        assert_close(v, e, 1e-9, what);
+    }
+    assert_close(r.hausdorff(), 3f64.sqrt() * e, 1e-9, "Hausdorff");
+    assert_close(r.diagonal, 3f64.sqrt(), 1e-12, "diagonal");
+    assert_close(r.hausdorff_percent(), 100.0 * e, 1e-7, "Hausdorff %");
+    assert_eq!(r.a_to_b.samples, 100_000 + 8);
+}
+
+#[test]
+fn vertex_samples_count_towards_the_max_only() {
+    let a = cube(0.5);
+    let b = cube(0.4);
+    let e = 0.5 - f64::from(0.4f32);
+    let with = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
+    let without = measure(
+        a.r(),
+        b.r(),
+        &MeasureOptions::DEFAULT.with_vertex_samples(false),
+    )
+    .unwrap();
+    assert_eq!(without.a_to_b.samples, 10_000);
+    assert_eq!(with.a_to_b.mean, without.a_to_b.mean);
+    assert_eq!(with.a_to_b.rms, without.a_to_b.rms);
+    // Random samples come near the corners but never reach them.
+    assert!(without.a_to_b.max < 3f64.sqrt() * e);
+    assert!(without.a_to_b.max > 3f64.sqrt() * e * 0.95);
+}
+
+#[test]
+fn translation_bounds_the_distance() {
+    // Every point p of A has p + t on B, so no one-sided distance exceeds |t|.
+    let a = bumpy(40);
+    let t = [0.01f32, -0.02, 0.015];
+    let b = a.translated(t);
+    let r = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
+    let len = t.map(f64::from).iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(r.hausdorff() <= len + 1e-7, "{} > {len}", r.hausdorff());
+    assert!(r.a_to_b.mean > 0.1 * len && r.a_to_b.mean < len, "{r:?}");
+    assert!(r.a_to_b.rms >= r.a_to_b.mean && r.a_to_b.max >= r.a_to_b.rms);
+}
+
+// ---------------------------------------------------------------- determinism
+
+fn fine_and_coarse() -> (Mesh, Mesh) {
+    (bumpy(60), bumpy(9).translated([0.003, -0.002, 0.004]))
+}
+
+#[test]
+fn same_input_same_report() {
+    let (a, b) = fine_and_coarse();
+    let opts = MeasureOptions::DEFAULT;
+    let first = measure(a.r(), b.r(), &opts).unwrap();
+    let second = measure(a.r(), b.r(), &opts).unwrap();
+    assert_eq!(first, second);
+    // The seed is used: another seed samples other points (but agrees closely).
+    let other = measure(a.r(), b.r(), &opts.with_seed(7)).unwrap();
+    assert_ne!(first.a_to_b.mean, other.a_to_b.mean);
+    assert_close(
+        other.a_to_b.mean,
+        first.a_to_b.mean,
+        0.02 * first.a_to_b.mean,
+        "seed",
+    );
+}
+
+#[test]
+fn report_does_not_depend_on_thread_count() {
+    let (a, b) = fine_and_coarse();
+    // 50,000 samples are 13 chunks: the reduction crosses threads.
+    let opts = MeasureOptions::DEFAULT.with_min_samples(50_000);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| measure(a.r(), b.r(), &opts).unwrap())
+    };
+    let one = run(1);
+    let two = run(2);
+    let three = run(3);
+    assert_eq!(one, two);
+    assert_eq!(one, three);
+}
+
+// ---------------------------------------------------------------- empty and invalid input
+
+#[test]
+fn empty_meshes_give_zero_or_infinite_distances() {
+    let empty = Mesh {
+        positions: vec![[1.0, 2.0, 3.0]],
+        triangles: vec![],
+    };
+    let c = cube(1.0);
+    let opts = MeasureOptions::DEFAULT;
+
+    let r = measure(empty.r(), c.r(), &opts).unwrap();
+    assert_eq!(r.a_to_b, Distance::NONE);
+    assert_eq!(r.b_to_a.max, f64::INFINITY);
+    assert_eq!(r.b_to_a.rms, f64::INFINITY);
+    assert_eq!(r.hausdorff(), f64::INFINITY);
+    assert_eq!(r.diagonal, 0.0);
+    assert_eq!(r.hausdorff_percent(), f64::INFINITY);
+
+    let r = measure(c.r(), empty.r(), &opts).unwrap();
+    assert_eq!(r.a_to_b.max, f64::INFINITY);
+    assert_eq!(r.a_to_b.mean, f64::INFINITY);
+    assert_eq!(r.b_to_a, Distance::NONE);
+    assert_close(r.diagonal, 2.0 * 3f64.sqrt(), 1e-12, "diagonal");
+    assert_eq!(r.hausdorff_percent(), f64::INFINITY);
+
+    let r = measure(empty.r(), empty.r(), &opts).unwrap();
+    assert_eq!(r.hausdorff(), 0.0);
+    assert_eq!(r.hausdorff_percent(), 0.0);
+    assert_eq!(r.rms_percent(), 0.0);
+}
+
+#[test]
+fn zero_area_mesh_is_measured_at_its_vertices() {
+    // Two collinear triangles: a segment from (0,0,1) to (1,0,1) above the plane z = 0.
+    let sliver = Mesh {
+        positions: vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.5, 0.0, 1.0]],
+        triangles: vec![[0, 1, 2], [2, 1, 0]],
+    };
+    let plane = grid(4, |_, _| 0.0);
+    let r = measure(sliver.r(), plane.r(), &MeasureOptions::DEFAULT).unwrap();
+    assert_eq!(r.a_to_b.samples, 3);
+    assert_close(r.a_to_b.max, 1.0, 1e-12, "sliver→plane max");
+    assert_close(r.a_to_b.mean, 1.0, 1e-12, "sliver→plane mean");
+    // From the plane to the segment: the far corner (0,1,0) or (1,1,0) is at √2.
+    assert_close(r.b_to_a.max, 2f64.sqrt(), 1e-9, "plane→sliver max");
+}
+
+#[test]
+fn out_of_range_index_is_an_error_naming_mesh_and_triangle() {
+    let c = cube(1.0);
+    let bad = Mesh {
+        positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        triangles: vec![[0, 1, 2], [0, 9, 3]],
+    };
+    let want = MeshError::IndexOutOfRange {
+        triangle: 1,
+        index: 9,
+        vertex_count: 4,
+    };
+    let opts = MeasureOptions::DEFAULT;
+    assert_eq!(
+        measure(c.r(), bad.r(), &opts),
+        Err(MeasureError::B(want.clone()))
+    );
+    assert_eq!(
+        measure(bad.r(), c.r(), &opts),
+        Err(MeasureError::A(want.clone()))
+    );
+    assert_eq!(TriangleBvh::new(bad.r()).unwrap_err(), want);
+    let bvh = TriangleBvh::new(c.r()).unwrap();
+    assert_eq!(one_sided(bad.r(), &bvh, &opts), Err(want));
+    assert_eq!(
+        MeasureError::A(MeshError::IndexOutOfRange {
+            triangle: 1,
+            index: 9,
+            vertex_count: 4
+        })
+        .to_string(),
+        "mesh A (the original): triangle 1 refers to vertex 9, but there are 4 vertices"
+    );
+}
+
+#[test]
+fn non_finite_position_is_an_error_unless_unused() {
+    let mut m = cube(1.0);
+    m.positions.push([f32::NAN, 0.0, 0.0]); // unused: fine
+    assert!(measure(m.r(), m.r(), &MeasureOptions::DEFAULT).is_ok());
+    m.positions[5][1] = f32::INFINITY;
+    let err = measure(cube(1.0).r(), m.r(), &MeasureOptions::DEFAULT).unwrap_err();
+    assert!(
+        matches!(err, MeasureError::B(MeshError::NonFinite { vertex: 5, .. })),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn one_sided_equals_the_matching_half_of_measure() {
+    let (a, b) = fine_and_coarse();
+    let opts = MeasureOptions::DEFAULT;
+    let r = measure(a.r(), b.r(), &opts).unwrap();
+    let bvh_b = TriangleBvh::new(b.r()).unwrap();
+    assert_eq!(one_sided(a.r(), &bvh_b, &opts).unwrap(), r.a_to_b);
+}
+
+// ---------------------------------------------------------------- a real mesh
+
+/// `bunny.obj` from the shared assets, or `None` (after a notice) when they are absent.
+fn bunny() -> Option<Mesh> {
+    let dir = std::env::var_os("LODGEN_ASSETS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets")
+        });
+    let path = dir.join("bunny.obj");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        if std::env::var("CI").as_deref() == Ok("true") {
+            panic!("{} is missing (set LODGEN_ASSETS)", path.display());
+        }
+        eprintln!("skipping: {} not found (set LODGEN_ASSETS)", path.display());
+        return None;
+    };
+    let mut m = Mesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let c: Vec<f32> = w.take(3).map(|s| s.parse().unwrap()).collect();
+                m.positions.push([c[0], c[1], c[2]]);
+            }
+            Some("f") => {
+                // `i`, `i/t` or `i/t/n`, 1-based; triangles only in bunny.obj.
+                let c: Vec<u32> = w
+                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                m.triangles.push([c[0], c[1], c[2]]);
+            }
+            _ => {}
+        }
+    }
+    Some(m)
+}
+
+#[test]
+fn bunny_bvh_matches_brute_force_and_translation_bounds_distance() {
+    let Some(a) = bunny() else { return };
+    assert_eq!(a.triangles.len(), 69_451);
+    let bvh = TriangleBvh::new(a.r()).unwrap();
+    let corner = |t: [u32; 3]| t.map(|v| a.positions[v as usize].map(f64::from));
+    // Points around and on the bunny: vertices pushed off the surface by varying amounts.
+    for k in 0..40usize {
+        let v = a.positions[(k * 7919) % a.positions.len()].map(f64::from);
+        let off = 0.002 * k as f64;
+        let p = [v[0] + off, v[1] - 0.5 * off, v[2] + 0.25 * off];
+        let brute = a
+            .triangles
+            .iter()
+            .map(|&t| {
+                let [x, y, z] = corner(t);
+                distance_squared(p, closest_point_on_triangle(p, x, y, z))
+            })
+            .fold(f64::INFINITY, f64::min);
+        let (d2, _, _) = bvh.closest_point(p).unwrap();
+        assert!(
+            (d2 - brute).abs() <= 1e-12 * (1.0 + brute),
+            "{d2} vs {brute}"
+        );
+    }
+    let t = [0.001f32, 0.0005, -0.0008];
+    let b = a.translated(t);
+    let r = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
+    let len = t.map(f64::from).iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(r.hausdorff() <= len + 1e-7, "{r:?}");
+    assert!(r.rms() > 0.2 * len, "{r:?}");
+    assert_close(r.diagonal, 0.2502, 1e-4, "bunny diagonal");
+    // Defaults: 2 per triangle each way plus the 34,834 referenced vertices.
+    assert_eq!(r.a_to_b.samples, 2 * 69_451 + 34_834);
+}

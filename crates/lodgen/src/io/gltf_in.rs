@@ -1,0 +1,684 @@
+//! glTF 2.0 reader (`.gltf` with external or `data:` buffers, and `.glb`).
+//!
+//! The JSON is parsed and validated by the `gltf` crate; the GLB container,
+//! the buffers and the accessors are read here with every offset, length
+//! and index checked, so a hostile file yields a [`ReadError`] naming the
+//! JSON path (`meshes[0].primitives[1].indices[6]`) instead of a panic.
+//!
+//! Every primitive of every mesh is read: `POSITION`, `NORMAL`, `TEXCOORD_0`
+//! (float, or integer with `normalized`), indices (`u8`/`u16`/`u32`, or
+//! sequential when absent), sparse accessors, and the material index.
+//! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` become triangle lists.
+//! `POINTS` and `LINE*` primitives, and triangle primitives with no complete
+//! triangle, are left out of [`SourceMesh::primitives`]; a mesh left with no
+//! triangle at all is an error naming it, so `Scene::meshes[i]` is always
+//! glTF mesh `i`. Vertices are kept as stored (no compaction), texture
+//! coordinates keep glTF's convention. The parsed document and the buffers
+//! go to [`Origin::Gltf`] for the writer.
+
+use std::path::{Path, PathBuf};
+
+use gltf::json::accessor::{ComponentType, GenericComponentType, IndexComponentType, Type};
+use gltf::json::mesh::{Mode, Semantic};
+use gltf::json::validation::Checked;
+use gltf::json::Root;
+
+use super::{check_not_empty, ErrorKind, Location, ReadError};
+use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
+
+/// Refuse to allocate more accessor elements than this (a corrupt `count`
+/// in an accessor without buffer view would otherwise abort on allocation).
+const MAX_ELEMENTS: usize = 1 << 28;
+
+/// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
+/// resolved against the directory of `path`.
+pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
+    let r = Reader { path };
+    let (json, blob) = if src.starts_with(b"glTF") {
+        r.split_glb(src)?
+    } else {
+        (src, None)
+    };
+    let root: Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
+        r.err(
+            Location::File,
+            ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
+        )
+    })?;
+    let document = gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => match errors.first() {
+            Some((json_path, error)) => r.err(
+                Location::Json(json_path.0.clone()),
+                ErrorKind::Invalid(format!("{error}")),
+            ),
+            None => r.err(
+                Location::File,
+                ErrorKind::Invalid("invalid glTF".to_owned()),
+            ),
+        },
+        other => r.err(
+            Location::File,
+            ErrorKind::Invalid(format!("invalid glTF: {other}")),
+        ),
+    })?;
+    let root = document.into_json();
+    let buffers = r.load_buffers(&root, blob)?;
+
+    let materials = root
+        .materials
+        .iter()
+        .map(|m| Material {
+            name: m.name.clone().unwrap_or_default(),
+            base_color: Some(m.pbr_metallic_roughness.base_color_factor.0),
+        })
+        .collect();
+    let mut meshes = Vec::with_capacity(root.meshes.len());
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        let mut primitives = Vec::new();
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            let at = format!("meshes[{mi}].primitives[{pi}]");
+            if let Some(p) = r.primitive(&root, &buffers, prim, &at)? {
+                if p.triangle_count() > 0 {
+                    primitives.push(p);
+                }
+            }
+        }
+        if primitives.is_empty() {
+            let name = mesh.name.as_deref().unwrap_or("");
+            return Err(r.err(
+                Location::Json(format!("meshes[{mi}]")),
+                ErrorKind::Invalid(format!(
+                    "mesh {mi} `{name}` has no triangles (only points, lines or empty primitives)"
+                )),
+            ));
+        }
+        meshes.push(SourceMesh {
+            name: mesh.name.clone().unwrap_or_else(|| format!("mesh{mi}")),
+            primitives,
+        });
+    }
+    let scene = Scene {
+        meshes,
+        materials,
+        origin: Origin::Gltf {
+            path: path.to_path_buf(),
+            document: Box::new(root),
+            buffers,
+        },
+    };
+    check_not_empty(&scene, path)?;
+    Ok(scene)
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+}
+
+fn le_u32(b: &[u8], at: usize) -> Option<u32> {
+    let s = b.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+}
+
+impl Reader<'_> {
+    fn err(&self, location: Location, kind: ErrorKind) -> ReadError {
+        ReadError::new(self.path, location, kind)
+    }
+
+    fn json_err(&self, at: &str, message: String) -> ReadError {
+        self.err(Location::Json(at.to_owned()), ErrorKind::Invalid(message))
+    }
+
+    /// Splits a GLB container into its JSON chunk and optional BIN chunk.
+    fn split_glb<'s>(&self, src: &'s [u8]) -> Result<(&'s [u8], Option<&'s [u8]>), ReadError> {
+        let truncated =
+            |what: &str| self.err(Location::File, ErrorKind::Truncated(what.to_owned()));
+        let version = le_u32(src, 4).ok_or_else(|| truncated("GLB header"))?;
+        if version != 2 {
+            return Err(self.err(
+                Location::File,
+                ErrorKind::Unsupported(format!("GLB version {version} (only 2)")),
+            ));
+        }
+        let length = le_u32(src, 8).ok_or_else(|| truncated("GLB header"))? as usize;
+        if length > src.len() {
+            return Err(truncated(&format!(
+                "GLB header says {length} bytes, file has {}",
+                src.len()
+            )));
+        }
+        let data = &src[..length];
+        let mut pos = 12;
+        let mut json = None;
+        let mut bin = None;
+        while pos < data.len() {
+            let (Some(len), Some(kind)) = (le_u32(data, pos), le_u32(data, pos + 4)) else {
+                return Err(truncated(&format!("GLB chunk header at byte {pos}")));
+            };
+            let start = pos + 8;
+            let Some(chunk) = data.get(start..start.saturating_add(len as usize)) else {
+                return Err(truncated(&format!("GLB chunk at byte {pos} ({len} bytes)")));
+            };
+            match kind {
+                0x4E4F_534A if json.is_none() => json = Some(chunk),
+                0x004E_4942 if bin.is_none() => bin = Some(chunk),
+                _ => {}
+            }
+            pos = start + chunk.len();
+        }
+        let json = json.ok_or_else(|| {
+            self.err(
+                Location::File,
+                ErrorKind::Invalid("GLB has no JSON chunk".to_owned()),
+            )
+        })?;
+        Ok((json, bin))
+    }
+
+    /// Loads every buffer: the GLB BIN chunk, `data:` URIs, relative files.
+    fn load_buffers(&self, root: &Root, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, ReadError> {
+        let mut out = Vec::with_capacity(root.buffers.len());
+        for (i, buffer) in root.buffers.iter().enumerate() {
+            let at = format!("buffers[{i}]");
+            let data = match &buffer.uri {
+                None => match blob {
+                    Some(b) if i == 0 => b.to_vec(),
+                    _ => {
+                        return Err(
+                            self.json_err(&at, "buffer has no uri and no GLB BIN chunk".to_owned())
+                        )
+                    }
+                },
+                Some(uri) => {
+                    if let Some(rest) = uri.strip_prefix("data:") {
+                        let Some((_, payload)) = rest.split_once(";base64,") else {
+                            return Err(self.json_err(&at, "data URI is not base64".to_owned()));
+                        };
+                        decode_base64(payload).ok_or_else(|| {
+                            self.json_err(&at, "invalid base64 in data URI".to_owned())
+                        })?
+                    } else if uri.contains(':') {
+                        return Err(self.err(
+                            Location::Json(format!("{at}.uri")),
+                            ErrorKind::Unsupported(format!("URI scheme in `{uri}`")),
+                        ));
+                    } else {
+                        let rel = percent_decode(uri).ok_or_else(|| {
+                            self.json_err(&format!("{at}.uri"), format!("invalid URI `{uri}`"))
+                        })?;
+                        let file: PathBuf = self.path.parent().unwrap_or(Path::new("")).join(rel);
+                        std::fs::read(&file).map_err(|e| {
+                            self.err(
+                                Location::Json(format!("{at}.uri")),
+                                ErrorKind::Invalid(format!(
+                                    "cannot read buffer file {}",
+                                    file.display()
+                                )),
+                            )
+                            .with_source(e)
+                        })?
+                    }
+                }
+            };
+            let declared = buffer.byte_length.0;
+            if (data.len() as u64) < declared {
+                return Err(self.err(
+                    Location::Json(at),
+                    ErrorKind::Truncated(format!(
+                        "buffer has {} bytes, byteLength says {declared}",
+                        data.len()
+                    )),
+                ));
+            }
+            out.push(data);
+        }
+        Ok(out)
+    }
+
+    /// Reads one primitive; `None` for points and lines.
+    fn primitive(
+        &self,
+        root: &Root,
+        buffers: &[Vec<u8>],
+        prim: &gltf::json::mesh::Primitive,
+        at: &str,
+    ) -> Result<Option<Primitive>, ReadError> {
+        let mode = match prim.mode {
+            Checked::Valid(m) => m,
+            Checked::Invalid => {
+                return Err(self.json_err(&format!("{at}.mode"), "invalid mode".to_owned()))
+            }
+        };
+        if matches!(
+            mode,
+            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+        ) {
+            return Ok(None);
+        }
+        let attribute = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|i| i.value());
+        let pos_at = format!("{at}.attributes.POSITION");
+        let pos_acc = attribute(Semantic::Positions)
+            .ok_or_else(|| self.json_err(at, "primitive has no POSITION attribute".to_owned()))?;
+        let positions: Vec<[f32; 3]> = self.vectors(root, buffers, pos_acc, &pos_at)?;
+        let n = positions.len();
+        if let Some(i) = positions
+            .iter()
+            .position(|p| p.iter().any(|x| !x.is_finite()))
+        {
+            let bad = positions[i]
+                .into_iter()
+                .find(|x| !x.is_finite())
+                .unwrap_or(f32::NAN);
+            return Err(self.err(
+                Location::Json(format!("{pos_at}[{i}]")),
+                ErrorKind::NonFinite {
+                    what: format!("POSITION of vertex {i} (accessor {pos_acc})"),
+                    value: bad,
+                },
+            ));
+        }
+        let normals = match attribute(Semantic::Normals) {
+            Some(a) => Some(self.same_count(
+                self.vectors(root, buffers, a, &format!("{at}.attributes.NORMAL"))?,
+                n,
+                at,
+                "NORMAL",
+            )?),
+            None => None,
+        };
+        let texcoords = match attribute(Semantic::TexCoords(0)) {
+            Some(a) => Some(self.same_count(
+                self.vectors(root, buffers, a, &format!("{at}.attributes.TEXCOORD_0"))?,
+                n,
+                at,
+                "TEXCOORD_0",
+            )?),
+            None => None,
+        };
+        let ind_at = format!("{at}.indices");
+        let raw: Vec<u32> = match prim.indices {
+            Some(acc) => {
+                let (values, dims) = self.accessor(root, buffers, acc.value(), &ind_at)?;
+                if dims != 1 {
+                    return Err(self.json_err(
+                        &ind_at,
+                        format!("index accessor {} is not SCALAR", acc.value()),
+                    ));
+                }
+                let mut out = Vec::with_capacity(values.len());
+                for (k, v) in values.into_iter().enumerate() {
+                    if !(v >= 0.0 && v.fract() == 0.0 && v < n as f64) {
+                        return Err(self.err(
+                            Location::Json(format!("{ind_at}[{k}]")),
+                            ErrorKind::IndexOutOfRange {
+                                what: "index",
+                                target: "vertex",
+                                index: v as i64,
+                                count: n,
+                            },
+                        ));
+                    }
+                    out.push(v as u32);
+                }
+                out
+            }
+            None => (0..n as u32).collect(),
+        };
+        let indices = match mode {
+            Mode::Triangles => {
+                if raw.len() % 3 != 0 {
+                    return Err(self.json_err(
+                        &ind_at,
+                        format!("{} indices is not a multiple of 3 for TRIANGLES", raw.len()),
+                    ));
+                }
+                raw
+            }
+            Mode::TriangleStrip => strip_to_list(&raw),
+            Mode::TriangleFan => fan_to_list(&raw),
+            _ => unreachable!("points and lines returned above"),
+        };
+        let material = prim.material.map(|m| m.value());
+        if let Some(m) = material {
+            if m >= root.materials.len() {
+                return Err(self.json_err(
+                    &format!("{at}.material"),
+                    format!("material {m} does not exist"),
+                ));
+            }
+        }
+        Ok(Some(Primitive {
+            material,
+            positions,
+            normals,
+            texcoords,
+            indices,
+        }))
+    }
+
+    fn same_count<T>(
+        &self,
+        v: Vec<T>,
+        n: usize,
+        at: &str,
+        name: &str,
+    ) -> Result<Vec<T>, ReadError> {
+        if v.len() != n {
+            return Err(self.json_err(
+                &format!("{at}.attributes.{name}"),
+                format!("{name} has {} entries, POSITION has {n}", v.len()),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// Reads accessor `index` as `N`-component float vectors.
+    fn vectors<const N: usize>(
+        &self,
+        root: &Root,
+        buffers: &[Vec<u8>],
+        index: usize,
+        at: &str,
+    ) -> Result<Vec<[f32; N]>, ReadError> {
+        let (values, dims) = self.accessor(root, buffers, index, at)?;
+        if dims != N {
+            return Err(self.json_err(
+                at,
+                format!("accessor {index} has {dims} components, expected {N}"),
+            ));
+        }
+        Ok(values
+            .chunks_exact(N)
+            .map(|c| std::array::from_fn(|k| c[k] as f32))
+            .collect())
+    }
+
+    /// Reads every component of accessor `index` (sparse applied,
+    /// normalized integers mapped to [-1, 1] / [0, 1]); returns the flat
+    /// values and the number of components per element.
+    fn accessor(
+        &self,
+        root: &Root,
+        buffers: &[Vec<u8>],
+        index: usize,
+        at: &str,
+    ) -> Result<(Vec<f64>, usize), ReadError> {
+        let here = format!("{at} (accessors[{index}])");
+        let bad = |message: String| self.json_err(&here, message);
+        let acc = root
+            .accessors
+            .get(index)
+            .ok_or_else(|| bad("accessor does not exist".to_owned()))?;
+        let Checked::Valid(GenericComponentType(ct)) = acc.component_type else {
+            return Err(bad("invalid componentType".to_owned()));
+        };
+        let dims = match acc.type_ {
+            Checked::Valid(Type::Scalar) => 1,
+            Checked::Valid(Type::Vec2) => 2,
+            Checked::Valid(Type::Vec3) => 3,
+            Checked::Valid(Type::Vec4) => 4,
+            _ => return Err(bad("accessor type is not SCALAR or VEC2..4".to_owned())),
+        };
+        let count = usize::try_from(acc.count.0)
+            .ok()
+            .filter(|&c| c <= MAX_ELEMENTS);
+        let count = count.ok_or_else(|| bad(format!("count {} is too large", acc.count.0)))?;
+        let elem = component_size(ct) * dims;
+        let mut values = vec![0.0f64; count * dims];
+        if let Some(view) = acc.buffer_view {
+            let offset = acc.byte_offset.map_or(0, |o| o.0);
+            let (data, stride) =
+                self.view(root, buffers, view.value(), offset, count, elem, &here)?;
+            for i in 0..count {
+                read_element(
+                    &data[i * stride..],
+                    ct,
+                    dims,
+                    acc.normalized,
+                    &mut values[i * dims..(i + 1) * dims],
+                );
+            }
+        }
+        if let Some(sparse) = &acc.sparse {
+            let n = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
+            let Checked::Valid(IndexComponentType(ict)) = sparse.indices.component_type else {
+                return Err(bad("invalid sparse index componentType".to_owned()));
+            };
+            let isize_ = component_size(ict);
+            let (idata, _) = self.view(
+                root,
+                buffers,
+                sparse.indices.buffer_view.value(),
+                sparse.indices.byte_offset.0,
+                n,
+                isize_,
+                &here,
+            )?;
+            let (vdata, _) = self.view(
+                root,
+                buffers,
+                sparse.values.buffer_view.value(),
+                sparse.values.byte_offset.0,
+                n,
+                elem,
+                &here,
+            )?;
+            let mut target = [0.0f64; 1];
+            for k in 0..n {
+                read_element(&idata[k * isize_..], ict, 1, false, &mut target);
+                let i = target[0] as usize;
+                if i >= count {
+                    return Err(bad(format!(
+                        "sparse index {i} is out of range ({count} elements)"
+                    )));
+                }
+                read_element(
+                    &vdata[k * elem..],
+                    ct,
+                    dims,
+                    acc.normalized,
+                    &mut values[i * dims..(i + 1) * dims],
+                );
+            }
+        }
+        Ok((values, dims))
+    }
+
+    /// The bytes of buffer view `view` starting at `offset`, checked to
+    /// hold `count` elements of `elem` bytes; returns them and the stride.
+    #[allow(clippy::too_many_arguments)]
+    fn view<'b>(
+        &self,
+        root: &Root,
+        buffers: &'b [Vec<u8>],
+        view: usize,
+        offset: u64,
+        count: usize,
+        elem: usize,
+        here: &str,
+    ) -> Result<(&'b [u8], usize), ReadError> {
+        let bad = |message: String| self.json_err(here, message);
+        let bv = root
+            .buffer_views
+            .get(view)
+            .ok_or_else(|| bad(format!("bufferView {view} does not exist")))?;
+        let buffer = buffers
+            .get(bv.buffer.value())
+            .ok_or_else(|| bad(format!("buffer {} does not exist", bv.buffer.value())))?;
+        let stride = bv.byte_stride.map_or(elem, |s| s.0);
+        if stride < elem {
+            return Err(bad(format!(
+                "byteStride {stride} is smaller than an element ({elem} bytes)"
+            )));
+        }
+        let view_start = bv.byte_offset.map_or(0, |o| o.0);
+        let view_end = view_start.checked_add(bv.byte_length.0);
+        let needed = match count {
+            0 => Some(0u64),
+            c => (stride as u64)
+                .checked_mul(c as u64 - 1)
+                .and_then(|x| x.checked_add(elem as u64)),
+        };
+        let start = view_start.checked_add(offset);
+        let end = start.zip(needed).and_then(|(s, n)| s.checked_add(n));
+        match (start, end, view_end) {
+            (Some(start), Some(end), Some(view_end)) if end <= view_end && view_end <= buffer.len() as u64 => {
+                Ok((&buffer[start as usize..end as usize], stride))
+            }
+            _ => Err(self.err(
+                Location::Json(here.to_owned()),
+                ErrorKind::Truncated(format!(
+                    "{count} elements of {elem} bytes do not fit in bufferView {view} (buffer {}, {} bytes)",
+                    bv.buffer.value(),
+                    buffer.len()
+                )),
+            )),
+        }
+    }
+}
+
+fn component_size(ct: ComponentType) -> usize {
+    match ct {
+        ComponentType::I8 | ComponentType::U8 => 1,
+        ComponentType::I16 | ComponentType::U16 => 2,
+        ComponentType::U32 | ComponentType::F32 => 4,
+    }
+}
+
+/// Decodes one little-endian element of `out.len() == dims` components.
+/// `data` must hold at least one element (checked by `Reader::view`).
+fn read_element(data: &[u8], ct: ComponentType, dims: usize, normalized: bool, out: &mut [f64]) {
+    let size = component_size(ct);
+    debug_assert!(data.len() >= size * dims);
+    for (k, slot) in out.iter_mut().enumerate().take(dims) {
+        let b = &data[k * size..(k + 1) * size];
+        *slot = match ct {
+            ComponentType::I8 => {
+                let v = b[0] as i8 as f64;
+                if normalized {
+                    (v / 127.0).max(-1.0)
+                } else {
+                    v
+                }
+            }
+            ComponentType::U8 => {
+                let v = b[0] as f64;
+                if normalized {
+                    v / 255.0
+                } else {
+                    v
+                }
+            }
+            ComponentType::I16 => {
+                let v = i16::from_le_bytes([b[0], b[1]]) as f64;
+                if normalized {
+                    (v / 32767.0).max(-1.0)
+                } else {
+                    v
+                }
+            }
+            ComponentType::U16 => {
+                let v = u16::from_le_bytes([b[0], b[1]]) as f64;
+                if normalized {
+                    v / 65535.0
+                } else {
+                    v
+                }
+            }
+            ComponentType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            ComponentType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        };
+    }
+}
+
+/// glTF triangle strip to list: triangle `i` is
+/// `(v[i], v[i + 1 + i % 2], v[i + 2 - i % 2])` (glTF 2.0 §3.7.2.1).
+pub(crate) fn strip_to_list(v: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(v.len().saturating_sub(2) * 3);
+    for i in 0..v.len().saturating_sub(2) {
+        out.extend_from_slice(&[v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]]);
+    }
+    out
+}
+
+/// glTF triangle fan to list: triangle `i` is `(v[i + 1], v[i + 2], v[0])`.
+pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(v.len().saturating_sub(2) * 3);
+    for i in 0..v.len().saturating_sub(2) {
+        out.extend_from_slice(&[v[i + 1], v[i + 2], v[0]]);
+    }
+    out
+}
+
+/// Standard base64 (padding optional); `None` on any invalid character.
+fn decode_base64(s: &str) -> Option<Vec<u8>> {
+    let s = s.trim_end_matches('=');
+    let mut out = Vec::with_capacity(s.len() * 3 / 4);
+    let mut acc = 0u32;
+    let mut bits = 0;
+    for c in s.bytes() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        };
+        acc = (acc << 6) | v as u32;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Some(out)
+}
+
+/// Decodes `%XX` escapes of a relative URI; `None` if malformed.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_values() {
+        assert_eq!(decode_base64("TWFu").as_deref(), Some(&b"Man"[..]));
+        assert_eq!(decode_base64("TWE=").as_deref(), Some(&b"Ma"[..]));
+        assert_eq!(decode_base64("TQ==").as_deref(), Some(&b"M"[..]));
+        assert_eq!(decode_base64("T!=="), None);
+    }
+
+    #[test]
+    fn strip_and_fan_follow_the_spec() {
+        assert_eq!(
+            strip_to_list(&[0, 1, 2, 3, 4]),
+            vec![0, 1, 2, 1, 3, 2, 2, 3, 4]
+        );
+        assert_eq!(fan_to_list(&[0, 1, 2, 3]), vec![1, 2, 0, 2, 3, 0]);
+        assert!(strip_to_list(&[0, 1]).is_empty());
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.bin").as_deref(), Some("a b.bin"));
+        assert_eq!(percent_decode("a%2"), None);
+        assert_eq!(percent_decode("%FF"), None);
+    }
+}

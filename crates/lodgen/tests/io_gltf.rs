@@ -1,0 +1,301 @@
+//! glTF reader: a small document built here (JSON + base64 data URI, and
+//! the same as GLB) with indexed triangles, a triangle strip, a fan, a
+//! points primitive, two meshes on a node hierarchy; then broken variants.
+
+use std::path::Path;
+
+use lodgen::io::{read_gltf, read_scene, ErrorKind, Location, ReadError};
+use lodgen::scene::{Origin, Scene};
+use serde_json::{json, Value};
+
+const POSITIONS: [[f32; 3]; 5] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [2.0, 2.0, 0.0],
+];
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// The binary buffer (180 bytes) and the JSON document without buffer URI.
+fn document() -> (Value, Vec<u8>) {
+    let mut bin = Vec::new();
+    for p in POSITIONS {
+        p.iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    }
+    for _ in 0..5 {
+        [0.0f32, 0.0, 1.0]
+            .iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    }
+    for p in POSITIONS {
+        [p[0] / 2.0, p[1] / 2.0]
+            .iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    bin.extend_from_slice(&[0u8, 1, 2, 3, 4]);
+    bin.resize(180, 0);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"mesh": 0, "translation": [1.0, 2.0, 3.0], "children": [1]},
+            {"mesh": 1, "scale": [2.0, 2.0, 2.0]}
+        ],
+        "materials": [
+            {"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, 1.0]}},
+            {"name": "plain"}
+        ],
+        "meshes": [
+            {"name": "multi", "primitives": [
+                {"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0},
+                {"attributes": {"POSITION": 0}, "indices": 4, "mode": 5, "material": 1},
+                {"attributes": {"POSITION": 0}, "mode": 0},
+                {"attributes": {"POSITION": 0}, "mode": 6}
+            ]},
+            {"name": "plain", "primitives": [{"attributes": {"POSITION": 5}}]}
+        ],
+        "buffers": [{"byteLength": 180}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 60},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 60},
+            {"buffer": 0, "byteOffset": 120, "byteLength": 40},
+            {"buffer": 0, "byteOffset": 160, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 172, "byteLength": 5}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [2.0, 2.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 5, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 5, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"},
+            {"bufferView": 4, "componentType": 5121, "count": 5, "type": "SCALAR"},
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}
+        ]
+    });
+    (doc, bin)
+}
+
+fn gltf_bytes(mut doc: Value, bin: &[u8]) -> Vec<u8> {
+    doc["buffers"][0]["uri"] = json!(format!(
+        "data:application/octet-stream;base64,{}",
+        base64(bin)
+    ));
+    serde_json::to_vec_pretty(&doc).unwrap()
+}
+
+fn glb_bytes(doc: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::to_vec(doc).unwrap();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+fn check_scene(s: &Scene) {
+    assert_eq!(s.meshes.len(), 2);
+    let multi = &s.meshes[0];
+    assert_eq!(multi.name, "multi");
+    // The POINTS primitive is left out.
+    assert_eq!(multi.primitives.len(), 3);
+    let tri = &multi.primitives[0];
+    assert_eq!(tri.positions, POSITIONS.to_vec());
+    assert_eq!(tri.indices, vec![0, 1, 2, 0, 2, 3]);
+    assert_eq!(tri.normals.as_deref(), Some(&[[0.0, 0.0, 1.0]; 5][..]));
+    assert_eq!(tri.texcoords.as_ref().unwrap()[4], [1.0, 1.0]);
+    assert_eq!(tri.material, Some(0));
+    let strip = &multi.primitives[1];
+    // glTF 2.0: triangle i is (v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]).
+    assert_eq!(strip.indices, vec![0, 1, 2, 1, 3, 2, 2, 3, 4]);
+    assert_eq!(strip.material, Some(1));
+    assert!(strip.normals.is_none() && strip.texcoords.is_none());
+    let fan = &multi.primitives[2];
+    assert_eq!(fan.indices, vec![1, 2, 0, 2, 3, 0, 3, 4, 0]);
+    assert_eq!(fan.material, None);
+    let plain = &s.meshes[1].primitives;
+    assert_eq!(plain.len(), 1);
+    assert_eq!(plain[0].indices, vec![0, 1, 2]);
+    assert_eq!(plain[0].positions, POSITIONS[..3].to_vec());
+
+    assert_eq!(s.materials.len(), 2);
+    assert_eq!(s.materials[0].name, "red");
+    assert_eq!(s.materials[0].base_color, Some([1.0, 0.0, 0.0, 1.0]));
+    assert_eq!(s.materials[1].base_color, Some([1.0; 4]));
+
+    let Origin::Gltf {
+        document, buffers, ..
+    } = &s.origin
+    else {
+        panic!("glTF origin expected");
+    };
+    assert_eq!(document.nodes.len(), 2);
+    assert_eq!(document.nodes[0].translation, Some([1.0, 2.0, 3.0]));
+    assert_eq!(document.nodes[0].children.as_ref().map(Vec::len), Some(1));
+    assert_eq!(buffers.len(), 1);
+    assert_eq!(buffers[0].len(), 180);
+}
+
+#[test]
+fn gltf_with_data_uri() {
+    let (doc, bin) = document();
+    let s =
+        read_gltf(&gltf_bytes(doc, &bin), Path::new("t.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    check_scene(&s);
+}
+
+#[test]
+fn glb_from_file_and_external_bin() {
+    let (doc, bin) = document();
+    let dir = std::env::temp_dir().join(format!("lodgen-io-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let glb = dir.join("t.GLB");
+    std::fs::write(&glb, glb_bytes(&doc, &bin)).unwrap();
+    let mut external = doc.clone();
+    external["buffers"][0]["uri"] = json!("my%20data.bin");
+    std::fs::write(dir.join("my data.bin"), &bin).unwrap();
+    let sep = dir.join("sep.gltf");
+    std::fs::write(&sep, serde_json::to_vec(&external).unwrap()).unwrap();
+    let from_glb = read_scene(&glb);
+    let from_sep = read_scene(&sep);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let from_glb = from_glb.unwrap_or_else(|e| panic!("{e}"));
+    check_scene(&from_glb);
+    check_scene(&from_sep.unwrap_or_else(|e| panic!("{e}")));
+    let Origin::Gltf { path, .. } = &from_glb.origin else {
+        panic!("glTF origin expected");
+    };
+    assert_eq!(path, &glb);
+}
+
+fn broken(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> ReadError {
+    let (mut doc, mut bin) = document();
+    edit(&mut doc, &mut bin);
+    match read_gltf(&gltf_bytes(doc, &bin), Path::new("b.gltf")) {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn index_out_of_range_names_the_accessor_element() {
+    let e = broken(|_, bin| bin[164..166].copy_from_slice(&7u16.to_le_bytes()));
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[0].primitives[0].indices[2]".to_owned())
+    );
+    assert_eq!(
+        e.to_string(),
+        "b.gltf: meshes[0].primitives[0].indices[2]: index refers to vertex 7, but only 5 are defined"
+    );
+}
+
+#[test]
+fn nan_position_names_the_vertex() {
+    let e = broken(|_, bin| bin[16..20].copy_from_slice(&f32::NAN.to_le_bytes()));
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[0].primitives[0].attributes.POSITION[1]".to_owned())
+    );
+    assert!(matches!(*e.kind, ErrorKind::NonFinite { .. }), "{e}");
+}
+
+#[test]
+fn mesh_of_only_points_and_lines_is_an_error_naming_it() {
+    let e = broken(|doc, _| {
+        doc["meshes"][1]["primitives"] = json!([{"attributes": {"POSITION": 5}, "mode": 0}, {"attributes": {"POSITION": 5}, "mode": 1}]);
+    });
+    assert_eq!(e.location, Location::Json("meshes[1]".to_owned()));
+    assert!(
+        e.to_string().contains("mesh 1 `plain` has no triangles"),
+        "{e}"
+    );
+}
+
+#[test]
+fn accessor_past_its_buffer_view_is_reported() {
+    let e = broken(|doc, _| doc["accessors"][1]["count"] = json!(6));
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[0].primitives[0].attributes.NORMAL (accessors[1])".to_owned())
+    );
+    assert!(matches!(*e.kind, ErrorKind::Truncated(_)), "{e}");
+    let e = broken(|doc, _| doc["accessors"][0]["byteOffset"] = json!(u32::MAX));
+    assert!(matches!(*e.kind, ErrorKind::Truncated(_)), "{e}");
+}
+
+#[test]
+fn short_buffer_and_bad_references() {
+    let e = broken(|_, bin| bin.truncate(100));
+    assert_eq!(e.location, Location::Json("buffers[0]".to_owned()));
+    let e = broken(|doc, _| doc["meshes"][0]["primitives"][0]["indices"] = json!(42));
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[0].primitives[0].indices".to_owned())
+    );
+    let e = broken(|doc, _| doc["meshes"][0]["primitives"][1]["attributes"] = json!({"NORMAL": 1}));
+    assert!(e.to_string().contains("POSITION"), "{e}");
+    let e =
+        broken(|doc, _| doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(5));
+    assert!(matches!(*e.kind, ErrorKind::Invalid(_)), "{e}");
+}
+
+#[test]
+fn broken_containers() {
+    let bad = |bytes: &[u8]| read_gltf(bytes, Path::new("c.glb")).unwrap_err();
+    let (doc, bin) = document();
+    let glb = glb_bytes(&doc, &bin);
+    assert!(matches!(
+        *bad(&glb[..glb.len() - 10]).kind,
+        ErrorKind::Truncated(_)
+    ));
+    assert!(matches!(*bad(&glb[..6]).kind, ErrorKind::Truncated(_)));
+    let mut v1 = glb.clone();
+    v1[4] = 1;
+    assert!(matches!(*bad(&v1).kind, ErrorKind::Unsupported(_)));
+    let e = read_gltf(b"{\"asset\": ", Path::new("j.gltf")).unwrap_err();
+    assert!(
+        e.to_string().starts_with("j.gltf: invalid glTF JSON"),
+        "{e}"
+    );
+    let e = read_gltf(br#"{"asset": {"version": "2.0"}}"#, Path::new("j.gltf")).unwrap_err();
+    assert_eq!(*e.kind, ErrorKind::EmptyMesh);
+}
