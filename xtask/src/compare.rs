@@ -5,7 +5,8 @@
 //! `docs/compare.md` (table), `docs/compare.png` (error against triangle
 //! count) and `docs/renders/*.png` (the bunny at 10 % per method).
 //!
-//! Meshes are read from `$LODGEN_ASSETS`, else `<workspace>/../shared/assets`.
+//! Meshes are read from `$LODGEN_ASSETS`, else `<workspace>/../shared/assets`
+//! (or `shared/assets` beside a further ancestor).
 //! Errors are measured with `lodgen_pm::measure` against the welded input,
 //! in percent of its bounding-box diagonal. Options: `--meshes a,b` to run a
 //! subset; `--no-render` to skip pictures.
@@ -14,7 +15,9 @@ use crate::render::{render, write_png, View};
 use anyhow::{bail, Context, Result};
 use lodgen_pm::curvature::Reclassify;
 use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
-use lodgen_pm::{prepare, simplify_method, AdaptiveOptions, AdaptiveStop, Mesh, Method};
+use lodgen_pm::{
+    prepare, simplify_method, AdaptiveOptions, AdaptiveReport, AdaptiveStop, Mesh, Method,
+};
 use lodgen_pm::{SimplifyOptions, StopReason};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -128,10 +131,18 @@ fn workspace_root() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("."))
 }
 
+/// `$LODGEN_ASSETS`, else `shared/assets` next to the workspace or next to
+/// one of its ancestors (a worktree under `wt/` finds the same directory).
 fn assets_dir() -> PathBuf {
-    std::env::var_os("LODGEN_ASSETS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("../shared/assets"))
+    if let Some(dir) = std::env::var_os("LODGEN_ASSETS") {
+        return PathBuf::from(dir);
+    }
+    let root = workspace_root();
+    root.ancestors()
+        .skip(1)
+        .map(|a| a.join("shared/assets"))
+        .find(|d| d.is_dir())
+        .unwrap_or_else(|| root.join("../shared/assets"))
 }
 
 /// All primitives of a file as one triangle list.
@@ -185,16 +196,22 @@ fn meshopt_simplify(mesh: &Mesh, target: usize) -> Mesh {
     }
 }
 
-fn stop_note(stop: AdaptiveStop, sweeps: usize) -> String {
-    match stop {
-        AdaptiveStop::Target => String::new(),
+fn stop_note(r: &AdaptiveReport) -> String {
+    let locked = format!(
+        "{} of {} interior vertices left are high-curvature (locked)",
+        r.last_high, r.last_interior
+    );
+    match r.stop {
+        AdaptiveStop::Target | AdaptiveStop::Qem(StopReason::Target) => String::new(),
         AdaptiveStop::Locked => format!(
-            "stopped after {sweeps} sweeps: every vertex left is high-curvature or border (locked)"
+            "stopped after {} sweeps: no removable edge or triangle left; {locked}",
+            r.sweeps
         ),
         AdaptiveStop::Illegal => format!(
-            "stopped after {sweeps} sweeps: every remaining collapse is illegal (link/flip) or was rolled back"
+            "stopped after {} sweeps: {locked}; none of the {} candidate triangles around the \
+             others has a legal collapse (link/flip) or one free of Algorithm 5 defects",
+            r.sweeps, r.last_candidates
         ),
-        AdaptiveStop::Qem(StopReason::Target) => String::new(),
         AdaptiveStop::Qem(r) => format!("stopped: {r:?}"),
     }
 }
@@ -206,7 +223,9 @@ pub fn run(args: &[String]) -> Result<()> {
     while let Some(a) = it.next() {
         match a.as_str() {
             "--meshes" => {
-                let list = it.next().context("--meshes needs a list, e.g. cow,fandisk")?;
+                let list = it
+                    .next()
+                    .context("--meshes needs a list, e.g. cow,fandisk")?;
                 meshes = MESHES
                     .into_iter()
                     .filter(|m| list.split(',').any(|x| x == *m))
@@ -234,7 +253,12 @@ pub fn run(args: &[String]) -> Result<()> {
         if pictures && name == "bunny" {
             let file = "bunny-original.png".to_string();
             let img = render(&orig.positions, &orig.triangles, &view);
-            write_png(&docs.join("renders").join(&file), RENDER_SIZE, RENDER_SIZE, &img)?;
+            write_png(
+                &docs.join("renders").join(&file),
+                RENDER_SIZE,
+                RENDER_SIZE,
+                &img,
+            )?;
             renders.push((format!("original ({n})"), file));
         }
         for &ratio in &RATIOS {
@@ -250,7 +274,7 @@ pub fn run(args: &[String]) -> Result<()> {
                         let r = out.report;
                         (
                             out.simplified.pm.base,
-                            stop_note(r.stop, r.sweeps),
+                            stop_note(&r),
                             r.prevented.total(),
                             r.repaired.total(),
                         )
@@ -277,7 +301,12 @@ pub fn run(args: &[String]) -> Result<()> {
                 if pictures && name == "bunny" && ratio == RENDER_RATIO {
                     let file = format!("bunny-10-{}.png", v.label.replace('/', "-"));
                     let img = render(&result.positions, &result.triangles, &view);
-                    write_png(&docs.join("renders").join(&file), RENDER_SIZE, RENDER_SIZE, &img)?;
+                    write_png(
+                        &docs.join("renders").join(&file),
+                        RENDER_SIZE,
+                        RENDER_SIZE,
+                        &img,
+                    )?;
                     renders.push((format!("{} ({})", v.label, result.triangles.len()), file));
                 }
                 rows.push(Row {
@@ -305,12 +334,7 @@ pub fn run(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-fn report(
-    meshes: &[&str],
-    vars: &[Variant],
-    rows: &[Row],
-    renders: &[(String, String)],
-) -> String {
+fn report(meshes: &[&str], vars: &[Variant], rows: &[Row], renders: &[(String, String)]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -334,6 +358,7 @@ fn report(
     let _ = writeln!(s, "![error against triangle count](compare.png)\n");
     // hybrid verdict
     let mut better = 0;
+    let mut better_h = 0;
     let mut total = 0;
     for m in meshes {
         for &r in &RATIOS {
@@ -346,13 +371,17 @@ fn report(
                 if h.rms < q.rms {
                     better += 1;
                 }
+                if h.hausdorff < q.hausdorff {
+                    better_h += 1;
+                }
             }
         }
     }
     let _ = writeln!(
         s,
-        "## Summary\n\n- `qem-curvature` has a lower RMS error than `qem` in {better} of {total} cases \
-         (same triangle targets).\n"
+        "## Summary\n\n- Does the curvature weighting help QEM? `qem-curvature` has a lower RMS error \
+         than `qem` in {better} of {total} cases and a lower Hausdorff distance in {better_h} of \
+         {total} (same triangle targets).\n"
     );
     for m in meshes {
         for &r in &RATIOS {
@@ -412,7 +441,11 @@ fn report(
                 x.millis,
                 x.prevented,
                 x.repaired,
-                if x.note.is_empty() { "" } else { "**stopped early**" }
+                if x.note.is_empty() {
+                    ""
+                } else {
+                    "**stopped early**"
+                }
             );
         }
     }
@@ -426,7 +459,11 @@ fn report(
             let _ = writeln!(
                 s,
                 "| {} |",
-                chunk.iter().map(|r| r.0.as_str()).collect::<Vec<_>>().join(" | ")
+                chunk
+                    .iter()
+                    .map(|r| r.0.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" | ")
             );
             let _ = writeln!(s, "|{}", "---|".repeat(chunk.len()));
             let _ = writeln!(

@@ -81,7 +81,8 @@ pub fn render(positions: &[[f32; 3]], triangles: &[[u32; 3]], view: &View) -> Ve
             [
                 (q[0] - view.center[0]) / px + n as f64 / 2.0,
                 n as f64 / 2.0 - (q[1] - view.center[1]) / px,
-                q[2] - view.center[2],
+                // same units as x and y, so the normal below is true
+                (q[2] - view.center[2]) / px,
             ]
         })
         .collect();

@@ -292,6 +292,12 @@ pub struct AdaptiveReport {
     pub threshold: f64,
     /// Vertices classified high curvature in the input.
     pub high_curvature_vertices: usize,
+    /// In the last sweep: interior vertices still alive, those of them
+    /// above the threshold (high curvature, locked), and the candidate
+    /// triangles the operator was tried on (0 for the QEM methods).
+    pub last_interior: usize,
+    pub last_high: usize,
+    pub last_candidates: usize,
     /// Vertices that never move: border (Algorithm 2) and non-manifold.
     pub fixed_vertices: usize,
     /// Operations refused by the legality rules (Algorithm 5 prevented).
@@ -592,6 +598,9 @@ pub fn simplify_method(
                 operations: stats.collapses,
                 threshold: theta_max,
                 high_curvature_vertices: 0,
+                last_interior: 0,
+                last_high: 0,
+                last_candidates: 0,
                 fixed_vertices: stats.locked_vertices,
                 prevented: stats.rejected,
                 repaired: Repairs::default(),
@@ -718,6 +727,9 @@ impl Engine {
                 operations: 0,
                 threshold: 0.0,
                 high_curvature_vertices: 0,
+                last_interior: 0,
+                last_high: 0,
+                last_candidates: 0,
                 fixed_vertices: fixed_count,
                 prevented: Rejections::default(),
                 repaired: Repairs::default(),
@@ -791,6 +803,9 @@ impl Engine {
             let removable: Vec<bool> = (0..theta.len())
                 .map(|v| movable[v] && theta[v] <= thr)
                 .collect();
+            self.report.last_interior = movable.iter().filter(|&&m| m).count();
+            self.report.last_high =
+                self.report.last_interior - removable.iter().filter(|&&r| r).count();
             let key = |t: &[u32; 3]| t.iter().map(|&v| theta[v as usize]).fold(0.0, f64::max);
             let mut order: Vec<(f64, u32)> = (0..self.tris.len())
                 .filter(|&t| self.tri_alive[t])
@@ -804,6 +819,7 @@ impl Engine {
                 })
                 .map(|t| (key(&self.tris[t]), t as u32))
                 .collect();
+            self.report.last_candidates = order.len();
             if order.is_empty() {
                 self.report.stop = AdaptiveStop::Locked;
                 break;
