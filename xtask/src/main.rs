@@ -3,8 +3,10 @@
 use std::path::PathBuf;
 
 mod bench;
+mod compare;
 mod draco;
 mod golden;
+mod render;
 mod test;
 
 const USAGE: &str = "usage: cargo xtask <task> [args]
@@ -13,7 +15,9 @@ tasks:
   test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
   draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
-  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny";
+  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny
+  compare [--meshes bunny,cow,fandisk] [--no-render]
+                          every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -27,6 +31,7 @@ fn main() -> anyhow::Result<()> {
         "golden" => golden::run(rest),
         "bench" => bench::run(rest),
         "bench-child" => bench::child(rest),
+        "compare" => compare::run(rest),
         "help" | "-h" | "--help" => {
             println!("{USAGE}");
             Ok(())

@@ -23,6 +23,7 @@
 
 pub mod bvh;
 pub mod collapse;
+pub mod curvature;
 pub mod heap;
 pub mod levels;
 pub mod measure;
@@ -35,6 +36,10 @@ pub mod stream;
 pub mod vsplit;
 
 pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
+pub use curvature::{
+    simplify_adaptive, simplify_method, Adaptive, AdaptiveOptions, AdaptiveReport, AdaptiveStop,
+    Method, Reclassify, Threshold,
+};
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
