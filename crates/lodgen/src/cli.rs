@@ -71,6 +71,30 @@ pub struct BuildArgs {
     #[arg(long, value_enum, default_value_t = PlacementMode::Optimal)]
     pub placement: PlacementMode,
 
+    /// Simplification method: "qem" (Garland–Heckbert pair contraction),
+    /// the curvature-adaptive operators of seed 001 — "edge" (full edge
+    /// collapse to the midpoint), "half-edge", "triangle" (three vertices to
+    /// the centroid) — which only touch low-curvature, non-border vertices
+    /// and may stop before the target, or "qem-curvature" (QEM with costs
+    /// scaled by 1 + w·θ/θmax). See docs/compare.md for how they compare.
+    #[arg(long, default_value = "qem", value_parser = ["qem", "edge", "half-edge", "triangle", "qem-curvature"])]
+    pub method: String,
+
+    /// Curvature classification of the adaptive methods: "sigma" (a vertex
+    /// is high-curvature when θ > mean + 2σ), "median" (the lower half is
+    /// removable), or a fraction such as 0.7 (that share is removable).
+    #[arg(long, value_name = "RULE", default_value = "sigma")]
+    pub curvature_threshold: String,
+
+    /// Depth k of the k-ring umbrella over which the region normal is
+    /// averaged (adaptive methods).
+    #[arg(long, value_name = "K", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.k_ring)]
+    pub k_ring: usize,
+
+    /// Weight w of the curvature term in --method qem-curvature.
+    #[arg(long, value_name = "W", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.hybrid_weight)]
+    pub curvature_weight: f64,
+
     /// Weight every face plane equally instead of by triangle area.
     #[arg(long)]
     pub uniform_weights: bool,
@@ -230,9 +254,38 @@ impl BuildArgs {
                 PlacementMode::Optimal => Placement::Optimal,
                 PlacementMode::HalfEdge => Placement::HalfEdge,
             });
+        let method: lodgen_pm::Method = self
+            .method
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--method {:?}: {e:?}", self.method))?;
+        let threshold = match self.curvature_threshold.trim() {
+            "sigma" => lodgen_pm::Threshold::Sigma(lodgen_pm::curvature::DEFAULT_SIGMA),
+            "median" => lodgen_pm::Threshold::Median,
+            other => {
+                let f: f64 = other.parse().with_context(|| {
+                    format!("--curvature-threshold: {other:?} is not sigma, median or a fraction")
+                })?;
+                if !(f > 0.0 && f < 1.0) {
+                    bail!("--curvature-threshold: the fraction {other:?} must be in (0, 1)");
+                }
+                lodgen_pm::Threshold::Fraction(f)
+            }
+        };
+        if self.k_ring == 0 {
+            bail!("--k-ring must be at least 1");
+        }
+        if !(self.curvature_weight >= 0.0 && self.curvature_weight.is_finite()) {
+            bail!("--curvature-weight must be finite and non-negative");
+        }
+        let adaptive = lodgen_pm::AdaptiveOptions::DEFAULT
+            .with_threshold(threshold)
+            .with_k_ring(self.k_ring)
+            .with_hybrid_weight(self.curvature_weight);
         Ok(BuildOptions {
             levels,
             simplify,
+            method,
+            adaptive,
             measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
         })
     }
@@ -357,6 +410,13 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
             st.stats.input_triangles,
             st.stats.input_vertices
         );
+        if st.stop != lodgen_pm::StopReason::Target {
+            s += &format!(
+                "  note: simplification stopped before the coarsest requested level: {:?} ({} rejected candidates)\n",
+                st.stop,
+                st.stats.rejected.total()
+            );
+        }
         s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
         for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
             let verts: usize = l.primitives.iter().map(|p| p.positions.len()).sum();

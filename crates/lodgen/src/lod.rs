@@ -20,7 +20,9 @@
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::levels::{self, LevelSpec};
 use lodgen_pm::measure::{self, ErrorReport, MeasureOptions, MeshRef};
-use lodgen_pm::{simplify, Mesh, MeshError, Simplified, SimplifyOptions};
+use lodgen_pm::{
+    simplify_adaptive, AdaptiveOptions, Mesh, MeshError, Method, Simplified, SimplifyOptions,
+};
 use std::collections::BTreeMap;
 use thiserror::Error;
 
@@ -40,6 +42,10 @@ pub enum LevelRequest {
 pub struct BuildOptions {
     pub levels: LevelRequest,
     pub simplify: SimplifyOptions,
+    /// QEM (default) or one of the curvature-adaptive methods of seed 001.
+    pub method: Method,
+    /// Options of the curvature-adaptive methods.
+    pub adaptive: AdaptiveOptions,
     pub measure: MeasureOptions,
 }
 
@@ -52,6 +58,8 @@ impl Default for BuildOptions {
                 LevelSpec::Ratio(0.02),
             ]),
             simplify: SimplifyOptions::DEFAULT,
+            method: Method::Qem,
+            adaptive: AdaptiveOptions::DEFAULT,
             measure: MeasureOptions::DEFAULT,
         }
     }
@@ -188,7 +196,14 @@ pub fn build_one(
             sopts.target_ratio = None;
         }
     }
-    let simplified = simplify(&flat.positions, &flat.indices, &sopts).map_err(mesh_err)?;
+    let simplified = simplify_adaptive(
+        &flat.positions,
+        &flat.indices,
+        opts.method,
+        &sopts,
+        &opts.adaptive,
+    )
+    .map_err(mesh_err)?;
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();

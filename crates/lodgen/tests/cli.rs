@@ -313,3 +313,37 @@ fn bunny_and_cow_lod_sets() {
         publish(&[&out, &rep]);
     }
 }
+
+#[test]
+fn every_method_builds_levels() {
+    let d = tmp("methods");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    for method in ["qem", "edge", "half-edge", "triangle", "qem-curvature"] {
+        let rep = d.join(format!("{method}.json"));
+        let o = lodgen(&[
+            input.to_str().unwrap(),
+            "--method",
+            method,
+            "--levels",
+            "50%,20%",
+            "-o",
+            d.join(format!("{method}.glb")).to_str().unwrap(),
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{method}: {}", stderr(&o));
+        let r = report(&rep);
+        let tris: Vec<u64> = r["meshes"][0]["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l["triangles"].as_u64().unwrap())
+            .collect();
+        assert_eq!(tris.len(), 2, "{method}");
+        assert!(tris[0] <= 1152 && tris[0] > tris[1], "{method}: {tris:?}");
+    }
+    let o = lodgen(&[input.to_str().unwrap(), "--method", "nope"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--method"));
+}
