@@ -23,6 +23,7 @@
 
 pub mod bvh;
 pub mod collapse;
+pub mod features;
 pub mod levels;
 pub mod measure;
 pub mod mesh;
@@ -36,7 +37,7 @@ pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
-pub use vsplit::{Corner, Cursor, ProgressiveMesh, VertexSplit};
+pub use vsplit::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 
 /// A simplification's result: the progressive mesh (numbered as in
 /// [`vsplit`]), what preparation removed, what the loop did, and why it
@@ -62,6 +63,41 @@ pub fn simplify(
 ) -> Result<Simplified, MeshError> {
     let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let stop = s.run();
+    let (pm, stats) = s.finish();
+    Ok(Simplified {
+        pm,
+        vertex_map: prepared.vertex_map,
+        triangle_map: prepared.triangle_map,
+        prepare: prepared.stats,
+        stats,
+        stop,
+    })
+}
+
+/// [`simplify`], with attributes kept apart by wedges: `indices` refer to
+/// unwelded vertices, and two corners share a wedge exactly when they share
+/// an index. Positions are welded for topology; every edge across which the
+/// indices differ (a UV seam, a hard edge, a material border when the
+/// caller numbers primitives apart) is a feature edge that collapses only
+/// along itself (see [`features`]). The log carries every corner's wedge
+/// (`pm.wedges`, input vertex indices), so replay restores them exactly.
+pub fn simplify_with_wedges(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    opts: &SimplifyOptions,
+) -> Result<Simplified, MeshError> {
+    let prepared = prepare(positions, indices)?;
+    let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let wedges = prepared
+        .triangle_map
+        .iter()
+        .map(|&t| {
+            let t = 3 * t as usize;
+            [indices[t], indices[t + 1], indices[t + 2]]
+        })
+        .collect();
+    s.set_wedges(wedges);
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {
