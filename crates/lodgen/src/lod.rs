@@ -12,15 +12,21 @@
 //! opens between primitives. Each output triangle keeps the primitive
 //! (material) of the input triangle it descends from.
 //!
-//! Attributes (normals, UVs) follow the corner: a corner that still sits on
-//! its input vertex keeps that vertex's attributes; a corner whose vertex
-//! was merged into another takes the attributes of the first input vertex
-//! of the surviving position. Seams are not yet protected (issue 5).
+//! Attributes live on corners (wedges). Flat vertices with the same
+//! primitive, position and attribute bits are one wedge; the core welds
+//! positions for topology and treats every edge across which wedges differ
+//! — UV seams, hard normals, colour or skin discontinuities, material
+//! borders — as a feature edge that collapses only along itself
+//! (`lodgen_pm::features`). The log tracks each corner's wedge, and a level's
+//! corner takes the attributes of its wedge: values are those of a source
+//! vertex of the same chart (half-edge for attributes, so JOINTS come from
+//! that source vertex and are never interpolated), normals renormalised,
+//! tangents re-orthogonalised against them, WEIGHTS renormalised to sum 1.
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::levels::{self, LevelSpec};
 use lodgen_pm::measure::{self, ErrorReport, MeasureOptions, MeshRef};
-use lodgen_pm::{simplify, Mesh, MeshError, Simplified, SimplifyOptions};
+use lodgen_pm::{simplify_with_wedges, Mesh, MeshError, Simplified, SimplifyOptions};
 use std::collections::BTreeMap;
 use thiserror::Error;
 
@@ -112,6 +118,57 @@ struct Flat {
     vertex_offset: Vec<u32>,
 }
 
+/// Bit pattern of every attribute of a flat vertex: equal keys, one wedge.
+fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
+    let p = &mesh.primitives[prim];
+    let mut k = vec![prim as u32];
+    let mut put = |xs: &[f32]| k.extend(xs.iter().map(|x| if *x == 0.0 { 0 } else { x.to_bits() }));
+    put(&p.positions[v]);
+    if let Some(a) = &p.normals {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.texcoords {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.tangents {
+        put(&a[v]);
+    }
+    for a in &p.extra_texcoords {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.colors {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.weights {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.joints {
+        k.extend(a[v].map(u32::from));
+    }
+    k
+}
+
+/// Flat vertex → its wedge's representative (the lowest flat vertex with
+/// the same primitive, position and attributes), so duplicated vertices
+/// with identical attributes do not make false seams.
+fn wedge_of_vertex(mesh: &SourceMesh, flat: &Flat) -> Vec<u32> {
+    let n = flat.positions.len();
+    let mut keys: Vec<(Vec<u32>, u32)> = (0..n as u32)
+        .map(|v| {
+            let (p, local) = locate(flat, v);
+            (wedge_key(mesh, p, local), v)
+        })
+        .collect();
+    keys.sort_unstable();
+    let mut out = vec![0; n];
+    for run in keys.chunk_by(|a, b| a.0 == b.0) {
+        for k in run {
+            out[k.1 as usize] = run[0].1;
+        }
+    }
+    out
+}
+
 fn flatten(mesh: &SourceMesh) -> Flat {
     let mut f = Flat {
         positions: Vec::new(),
@@ -188,7 +245,9 @@ pub fn build_one(
             sopts.target_ratio = None;
         }
     }
-    let simplified = simplify(&flat.positions, &flat.indices, &sopts).map_err(mesh_err)?;
+    let wedge = wedge_of_vertex(mesh, &flat);
+    let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
+    let simplified = simplify_with_wedges(&flat.positions, &wedged, &sopts).map_err(mesh_err)?;
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();
@@ -265,7 +324,7 @@ pub fn build_one(
         )
         .map_err(measure_err)?;
         lod_levels.push(LodLevel {
-            primitives: extract(mesh, &flat, &simplified, m),
+            primitives: extract(mesh, &flat, &simplified, m, cursor.wedges()),
             hausdorff: report.hausdorff() / diagonal.max(f64::MIN_POSITIVE),
             rms: report.rms() / diagonal.max(f64::MIN_POSITIVE),
             screen_coverage: 0.0,
@@ -291,8 +350,16 @@ pub fn build_one(
 }
 
 /// Turn a level of the progressive mesh back into the source's primitives,
-/// transferring attributes corner by corner.
-fn extract(source: &SourceMesh, flat: &Flat, s: &Simplified, level: &Mesh) -> Vec<Primitive> {
+/// transferring attributes corner by corner from each corner's wedge
+/// (`wedges`, flat vertex ids; without them, from the level vertex's first
+/// source vertex).
+fn extract(
+    source: &SourceMesh,
+    flat: &Flat,
+    s: &Simplified,
+    level: &Mesh,
+    wedges: Option<&[[u32; 3]]>,
+) -> Vec<Primitive> {
     let pm = &s.pm;
     // First input vertex of each welded vertex.
     let mut first_input = vec![u32::MAX; pm.vertex_origin.len()];
@@ -306,24 +373,25 @@ fn extract(source: &SourceMesh, flat: &Flat, s: &Simplified, level: &Mesh) -> Ve
         .iter()
         .map(|p| Primitive {
             material: p.material,
-            positions: Vec::new(),
             normals: p.normals.as_ref().map(|_| Vec::new()),
             texcoords: p.texcoords.as_ref().map(|_| Vec::new()),
-            indices: Vec::new(),
+            tangents: p.tangents.as_ref().map(|_| Vec::new()),
+            extra_texcoords: vec![Vec::new(); p.extra_texcoords.len()],
+            colors: p.colors.as_ref().map(|_| Vec::new()),
+            joints: p.joints.as_ref().map(|_| Vec::new()),
+            weights: p.weights.as_ref().map(|_| Vec::new()),
+            ..Primitive::default()
         })
         .collect();
-    // (primitive, level vertex, source input vertex) → output vertex
+    // (primitive, level vertex, wedge) → output vertex
     let mut remap: BTreeMap<(u32, u32, u32), u32> = BTreeMap::new();
     for (t, tri) in level.triangles.iter().enumerate() {
         let input_tri = s.triangle_map[pm.triangle_origin[t] as usize] as usize;
         let pi = flat.prim_of_triangle[input_tri];
         for (slot, &v) in tri.iter().enumerate() {
-            let welded = pm.vertex_origin[v as usize];
-            let corner = flat.indices[3 * input_tri + slot];
-            let src = if s.vertex_map[corner as usize] == welded {
-                corner
-            } else {
-                first_input[welded as usize]
+            let src = match wedges {
+                Some(w) => w[t][slot],
+                None => first_input[pm.vertex_origin[v as usize] as usize],
             };
             let next = prims[pi as usize].positions.len() as u32;
             let out = *remap.entry((pi, v, src)).or_insert_with(|| {
@@ -331,13 +399,7 @@ fn extract(source: &SourceMesh, flat: &Flat, s: &Simplified, level: &Mesh) -> Ve
                 prim.positions.push(level.positions[v as usize]);
                 // the source vertex may belong to another primitive
                 let (sp, local) = locate(flat, src);
-                let from = &source.primitives[sp];
-                if let Some(n) = prim.normals.as_mut() {
-                    n.push(from.normals.as_ref().map_or([0.0, 0.0, 1.0], |a| a[local]));
-                }
-                if let Some(uv) = prim.texcoords.as_mut() {
-                    uv.push(from.texcoords.as_ref().map_or([0.0, 0.0], |a| a[local]));
-                }
+                push_attributes(prim, &source.primitives[sp], local);
                 next
             });
             prims[pi as usize].indices.push(out);
@@ -346,6 +408,77 @@ fn extract(source: &SourceMesh, flat: &Flat, s: &Simplified, level: &Mesh) -> Ve
     // a material can vanish from a coarse level
     prims.retain(|p| !p.indices.is_empty());
     prims
+}
+
+/// Append vertex `v` of `from`'s attributes to `to` (defaults where `from`
+/// lacks one `to` has), normalised as the module docs say.
+fn push_attributes(to: &mut Primitive, from: &Primitive, v: usize) {
+    let normal = from.normals.as_ref().map(|a| normalize3(a[v]));
+    if let Some(n) = to.normals.as_mut() {
+        n.push(normal.unwrap_or([0.0, 0.0, 1.0]));
+    }
+    if let Some(uv) = to.texcoords.as_mut() {
+        uv.push(from.texcoords.as_ref().map_or([0.0; 2], |a| a[v]));
+    }
+    if let Some(t) = to.tangents.as_mut() {
+        let raw = from
+            .tangents
+            .as_ref()
+            .map_or([1.0, 0.0, 0.0, 1.0], |a| a[v]);
+        t.push(orthogonal_tangent(raw, normal));
+    }
+    for (i, uv) in to.extra_texcoords.iter_mut().enumerate() {
+        uv.push(from.extra_texcoords.get(i).map_or([0.0; 2], |a| a[v]));
+    }
+    if let Some(c) = to.colors.as_mut() {
+        c.push(from.colors.as_ref().map_or([1.0; 4], |a| a[v]));
+    }
+    if let Some(j) = to.joints.as_mut() {
+        j.push(from.joints.as_ref().map_or([0; 4], |a| a[v]));
+    }
+    if let Some(w) = to.weights.as_mut() {
+        w.push(normalize_weights(
+            from.weights.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |a| a[v]),
+        ));
+    }
+}
+
+fn normalize3(n: [f32; 3]) -> [f32; 3] {
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if l > 0.0 && l.is_finite() {
+        n.map(|x| x / l)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+/// Gram–Schmidt: the tangent's xyz made unit and orthogonal to the normal,
+/// its handedness `w` kept as ±1.
+fn orthogonal_tangent(t: [f32; 4], normal: Option<[f32; 3]>) -> [f32; 4] {
+    let mut x = [t[0], t[1], t[2]];
+    if let Some(n) = normal {
+        let d = x[0] * n[0] + x[1] * n[1] + x[2] * n[2];
+        x = [x[0] - d * n[0], x[1] - d * n[1], x[2] - d * n[2]];
+    }
+    let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+    let x = if l > 1e-12 {
+        x.map(|c| c / l)
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    [x[0], x[1], x[2], if t[3] < 0.0 { -1.0 } else { 1.0 }]
+}
+
+/// Skin weights made non-negative and summing to 1 (all on the first joint
+/// when they sum to 0).
+fn normalize_weights(w: [f32; 4]) -> [f32; 4] {
+    let w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+    let s: f32 = w.iter().sum();
+    if s > 0.0 {
+        w.map(|x| x / s)
+    } else {
+        [1.0, 0.0, 0.0, 0.0]
+    }
 }
 
 /// Flat vertex → (primitive, local vertex).
