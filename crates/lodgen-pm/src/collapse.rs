@@ -6,7 +6,7 @@
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
 //! form in `vsplit`.
 
-use crate::features::Features;
+use crate::features::{AttributeCost, Features};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, SimplifyOptions};
 use crate::pairs;
@@ -215,6 +215,8 @@ pub struct Simplifier {
     /// Feature edges and wedges, when set (`set_feature_edges`,
     /// `set_wedges`): feature vertices obey the border rule below.
     features: Option<Features>,
+    /// Attribute term of the heap key, when set (`set_attributes`).
+    attributes: Option<AttributeCost>,
 }
 
 #[inline]
@@ -358,6 +360,7 @@ impl Simplifier {
             scratch: Vec::new(),
             cost_scale: None,
             features: None,
+            attributes: None,
         };
         // Non-manifold vertices (several fans meeting at one vertex).
         for v in 0..nv as u32 {
@@ -525,6 +528,42 @@ impl Simplifier {
         self.rebuild_heap();
     }
 
+    /// Add an attribute term to every pair's heap key: `values` holds
+    /// `dims` attribute components per vertex (in the mesh's numbering),
+    /// already multiplied by their weights; see `features` for the cost.
+    /// Errors recorded in the log stay geometric. Call before the first
+    /// `step`. Panics if the length is not `dims ×` the vertex count (a
+    /// programming error, not input).
+    pub fn set_attributes(&mut self, values: Vec<f32>, dims: usize) {
+        assert_eq!(
+            values.len(),
+            dims * self.pos.len(),
+            "dims values per vertex"
+        );
+        let mut area = vec![0.0; self.pos.len()];
+        for (t, tri) in self.tris.iter().enumerate() {
+            if self.tri_alive[t] {
+                let [p0, p1, p2] = tri.map(|v| dv(self.pos[v as usize]));
+                let a = (p1 - p0).cross(p2 - p0).length() / 6.0;
+                for &v in tri {
+                    area[v as usize] += a;
+                }
+            }
+        }
+        let diagonal = Mesh {
+            positions: self.pos.clone(),
+            triangles: Vec::new(),
+        }
+        .diagonal();
+        self.attributes = Some(AttributeCost {
+            dims,
+            values,
+            area,
+            scale: diagonal * diagonal,
+        });
+        self.rebuild_heap();
+    }
+
     fn add_features(&mut self, edges: &[(u32, u32)]) {
         let nv = self.pos.len();
         let mut f = self
@@ -582,7 +621,16 @@ impl Simplifier {
 
     fn entry(&self, a: u32, b: u32) -> Entry {
         let (a, b) = (a.min(b), a.max(b));
-        let (_, mut cost) = self.target_of(a, b);
+        let (p, mut cost) = self.target_of(a, b);
+        if let Some(at) = &self.attributes {
+            // the farther endpoint is the one removed (as in `step`)
+            let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
+            cost += if (p - pa).length_squared() <= (p - pb).length_squared() {
+                at.cost(b, a)
+            } else {
+                at.cost(a, b)
+            };
+        }
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
         }
@@ -852,6 +900,9 @@ impl Simplifier {
         self.boundary[i1] |= self.boundary[i0];
         if let Some(f) = &mut self.features {
             f.contract(v0, v1);
+        }
+        if let Some(at) = &mut self.attributes {
+            at.area[i1] += at.area[i0];
         }
         if !self.partners[i0].is_empty() || !self.partners[i1].is_empty() {
             let mut p = std::mem::take(&mut self.partners[i0]);

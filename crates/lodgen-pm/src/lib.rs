@@ -82,13 +82,44 @@ pub fn simplify(
 /// caller numbers primitives apart) is a feature edge that collapses only
 /// along itself (see [`features`]). The log carries every corner's wedge
 /// (`pm.wedges`, input vertex indices), so replay restores them exactly.
+///
+/// `attributes` holds `dims` weighted values per input vertex (empty with
+/// `dims == 0`): they add the attribute term of [`features`] to the costs.
+/// Wrong lengths are a [`MeshError::AttributeCount`].
 pub fn simplify_with_wedges(
     positions: &[[f32; 3]],
     indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
     opts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
+    if attributes.len() != dims * positions.len() {
+        return Err(MeshError::AttributeCount {
+            len: attributes.len(),
+            dims,
+            vertex_count: positions.len(),
+        });
+    }
     let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    if dims > 0 {
+        // each welded vertex takes the values of its first input vertex
+        let nw = prepared.mesh.positions.len();
+        let mut values = vec![f32::NAN; dims * nw];
+        for (v, &w) in prepared.vertex_map.iter().enumerate() {
+            let w = w as usize;
+            if w < nw && values[dims * w].is_nan() {
+                values[dims * w..dims * (w + 1)]
+                    .copy_from_slice(&attributes[dims * v..dims * (v + 1)]);
+            }
+        }
+        for x in &mut values {
+            if !x.is_finite() {
+                *x = 0.0;
+            }
+        }
+        s.set_attributes(values, dims);
+    }
     let wedges = prepared
         .triangle_map
         .iter()

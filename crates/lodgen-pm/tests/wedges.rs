@@ -64,7 +64,7 @@ fn check_charts(out: &Simplified, pos: &[[f32; 3]], charts: &[u32], k: usize) {
 #[test]
 fn uv_seam_stays_a_seam_at_every_level() {
     let (pos, idx, charts) = seamed_grid();
-    let out = simplify_with_wedges(&pos, &idx, &SimplifyOptions::DEFAULT).unwrap();
+    let out = simplify_with_wedges(&pos, &idx, &[], 0, &SimplifyOptions::DEFAULT).unwrap();
     assert!(out.pm.base.triangles.len() < COARSE);
     for k in 0..=out.pm.len() {
         check_charts(&out, &pos, &charts, k);
@@ -105,7 +105,7 @@ fn cube_with_hard_normals_keeps_six_flat_faces() {
     let cube = shapes::cube([-1.0; 3], [1.0; 3], n);
     let per_face = (2 * n * n) as usize;
     let (pos, idx, charts) = unweld(&cube, |t| (t / per_face) as u32);
-    let out = simplify_with_wedges(&pos, &idx, &SimplifyOptions::DEFAULT).unwrap();
+    let out = simplify_with_wedges(&pos, &idx, &[], 0, &SimplifyOptions::DEFAULT).unwrap();
     assert_eq!(out.pm.base.triangles.len(), 12, "two triangles per face");
     check_charts(&out, &pos, &charts, 0);
     let c = out.pm.cursor();
@@ -126,7 +126,7 @@ fn cube_with_hard_normals_keeps_six_flat_faces() {
 #[test]
 fn replay_restores_wedges_exactly() {
     let (pos, idx, _) = seamed_grid();
-    let out = simplify_with_wedges(&pos, &idx, &SimplifyOptions::DEFAULT).unwrap();
+    let out = simplify_with_wedges(&pos, &idx, &[], 0, &SimplifyOptions::DEFAULT).unwrap();
     let pm = &out.pm;
     // fully refined: every corner has its input wedge again
     let mut c = pm.cursor();

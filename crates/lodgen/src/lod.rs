@@ -47,6 +47,37 @@ pub struct BuildOptions {
     pub levels: LevelRequest,
     pub simplify: SimplifyOptions,
     pub measure: MeasureOptions,
+    /// Weights of the attribute term of the cost (`lodgen_pm::features`).
+    pub attribute_weights: AttributeWeights,
+}
+
+/// Weights of each attribute in the cost: a difference of 1 in an
+/// attribute at weight 1 costs like a displacement by the bounding-box
+/// diagonal. 0 leaves an attribute out (its seams are still kept).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttributeWeights {
+    /// Unit normals (a difference of 2 is opposite). Default value: 0.5.
+    pub normal: f32,
+    /// `TEXCOORD_0`. Default value: 1.
+    pub uv: f32,
+    /// `COLOR_0`, RGBA. Default value: 0.5.
+    pub color: f32,
+}
+
+impl AttributeWeights {
+    /// meshoptimizer's suggested scale for normals and UVs (its demo uses
+    /// 0.5 and 1): attributes matter, positions still lead.
+    pub const DEFAULT: AttributeWeights = AttributeWeights {
+        normal: 0.5,
+        uv: 1.0,
+        color: 0.5,
+    };
+}
+
+impl Default for AttributeWeights {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
 }
 
 impl Default for BuildOptions {
@@ -59,6 +90,7 @@ impl Default for BuildOptions {
             ]),
             simplify: SimplifyOptions::DEFAULT,
             measure: MeasureOptions::DEFAULT,
+            attribute_weights: AttributeWeights::DEFAULT,
         }
     }
 }
@@ -146,6 +178,38 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
         k.extend(a[v].map(u32::from));
     }
     k
+}
+
+/// The weighted attribute vector of every flat vertex for the cost, and its
+/// length: normal, UV, colour, each present when some primitive has it and
+/// its weight is not 0 (vertices of primitives without it get zeros).
+fn weighted_attributes(mesh: &SourceMesh, flat: &Flat, w: &AttributeWeights) -> (Vec<f32>, usize) {
+    let any = |f: &dyn Fn(&Primitive) -> bool| mesh.primitives.iter().any(f);
+    let normal = w.normal != 0.0 && any(&|p| p.normals.is_some());
+    let uv = w.uv != 0.0 && any(&|p| p.texcoords.is_some());
+    let color = w.color != 0.0 && any(&|p| p.colors.is_some());
+    let dims = 3 * usize::from(normal) + 2 * usize::from(uv) + 4 * usize::from(color);
+    let mut out = Vec::with_capacity(dims * flat.positions.len());
+    if dims == 0 {
+        return (out, 0);
+    }
+    for p in &mesh.primitives {
+        for v in 0..p.positions.len() {
+            if normal {
+                let n = p.normals.as_ref().map_or([0.0; 3], |a| normalize3(a[v]));
+                out.extend(n.map(|x| x * w.normal));
+            }
+            if uv {
+                let t = p.texcoords.as_ref().map_or([0.0; 2], |a| a[v]);
+                out.extend(t.map(|x| x * w.uv));
+            }
+            if color {
+                let c = p.colors.as_ref().map_or([1.0; 4], |a| a[v]);
+                out.extend(c.map(|x| x * w.color));
+            }
+        }
+    }
+    (out, dims)
 }
 
 /// Flat vertex → its wedge's representative (the lowest flat vertex with
@@ -247,7 +311,9 @@ pub fn build_one(
     }
     let wedge = wedge_of_vertex(mesh, &flat);
     let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
-    let simplified = simplify_with_wedges(&flat.positions, &wedged, &sopts).map_err(mesh_err)?;
+    let (values, dims) = weighted_attributes(mesh, &flat, &opts.attribute_weights);
+    let simplified =
+        simplify_with_wedges(&flat.positions, &wedged, &values, dims, &sopts).map_err(mesh_err)?;
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();

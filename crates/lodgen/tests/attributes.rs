@@ -194,3 +194,13 @@ fn every_vertex_attribute_round_trips_through_gltf() {
     assert_eq!(q.extra_texcoords.len(), 1);
     assert_eq!(a, b);
 }
+
+#[test]
+fn attribute_weights_parse_and_refuse_bad_input() {
+    use lodgen::cli::parse_attribute_weights;
+    let w = parse_attribute_weights("normal=0.25, uv=2").unwrap();
+    assert_eq!((w.normal, w.uv, w.color), (0.25, 2.0, 0.5));
+    for bad in ["normal", "uv=-1", "uv=x", "bone=1", "uv=inf"] {
+        assert!(parse_attribute_weights(bad).is_err(), "{bad}");
+    }
+}
