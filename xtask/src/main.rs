@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+mod attributes;
 mod bench;
 mod draco;
 mod golden;
@@ -13,7 +14,8 @@ tasks:
   test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
   draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
-  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny";
+  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny
+  attributes              UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -26,6 +28,7 @@ fn main() -> anyhow::Result<()> {
         "draco" => draco::run(rest),
         "golden" => golden::run(rest),
         "bench" => bench::run(rest),
+        "attributes" => attributes::run(rest),
         "bench-child" => bench::child(rest),
         "help" | "-h" | "--help" => {
             println!("{USAGE}");
