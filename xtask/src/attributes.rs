@@ -220,13 +220,13 @@ fn attribute_errors(a: &Surface, b: &Surface) -> Result<((f64, f64), (f64, f64))
 fn interpolate(s: &Surface, t: [u32; 3], w: [f64; 3]) -> ([f64; 2], [f64; 3]) {
     let mut uv = [0.0; 2];
     let mut n = [0.0; 3];
-    for k in 0..3 {
-        let v = t[k] as usize;
-        for c in 0..2 {
-            uv[c] += w[k] * f64::from(s.uvs[v][c]);
+    for (k, &v) in t.iter().enumerate() {
+        let v = v as usize;
+        for (c, x) in uv.iter_mut().enumerate() {
+            *x += w[k] * f64::from(s.uvs[v][c]);
         }
-        for c in 0..3 {
-            n[c] += w[k] * f64::from(s.normals[v][c]);
+        for (c, x) in n.iter_mut().enumerate() {
+            *x += w[k] * f64::from(s.normals[v][c]);
         }
     }
     (uv, n)
