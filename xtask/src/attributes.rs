@@ -30,7 +30,21 @@ struct Surface {
     triangles: Vec<[u32; 3]>,
 }
 
-pub fn run(_args: &[String]) -> Result<()> {
+pub fn run(args: &[String]) -> Result<()> {
+    // `--attribute-weights=LIST`: lodgen's weights (default: its defaults)
+    let weights = match args
+        .iter()
+        .find_map(|a| a.strip_prefix("--attribute-weights="))
+    {
+        Some(list) => lodgen::cli::parse_attribute_weights(list)?,
+        None => lodgen::lod::AttributeWeights::DEFAULT,
+    };
+    // `--half-edge`: lodgen keeps input positions too, like meshopt
+    let placement = if args.iter().any(|a| a == "--half-edge") {
+        lodgen_pm::Placement::HalfEdge
+    } else {
+        lodgen_pm::Placement::Optimal
+    };
     let path = crate::shared_assets()?.join("spot.obj");
     let scene =
         lodgen::io::read_scene(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -49,9 +63,11 @@ pub fn run(_args: &[String]) -> Result<()> {
         "{:>6} {:>8} {:>7} {:>15} {:>15} {:>17}",
         "level", "tool", "tris", "uv mean/rms", "normal° mean/rms", "geom H/rms %"
     );
-    for ratio in [0.1, 0.02] {
+    for ratio in [0.5, 0.1, 0.02] {
         let opts = BuildOptions {
             levels: LevelRequest::Specs(vec![LevelSpec::Ratio(ratio)]),
+            simplify: lodgen_pm::SimplifyOptions::DEFAULT.with_placement(placement),
+            attribute_weights: weights,
             ..BuildOptions::default()
         };
         let build = build_one(0, &source, &opts, &mut |_| {})?;

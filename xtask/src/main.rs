@@ -15,7 +15,8 @@ tasks:
   draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny
-  attributes              UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
+  attributes [--half-edge] [--attribute-weights=LIST]
+                          UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
