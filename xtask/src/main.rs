@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+mod attributes;
 mod bench;
 mod compare;
 mod draco;
@@ -17,7 +18,10 @@ tasks:
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny
   compare [--meshes bunny,cow,fandisk] [--no-render]
-                          every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/";
+                          every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
+
+  attributes [--half-edge] [--attribute-weights=LIST]
+                          UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,6 +34,7 @@ fn main() -> anyhow::Result<()> {
         "draco" => draco::run(rest),
         "golden" => golden::run(rest),
         "bench" => bench::run(rest),
+        "attributes" => attributes::run(rest),
         "bench-child" => bench::child(rest),
         "compare" => compare::run(rest),
         "help" | "-h" | "--help" => {

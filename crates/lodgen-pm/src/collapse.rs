@@ -6,6 +6,7 @@
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
 //! form in `vsplit`.
 
+use crate::features::{AttributeCost, Features};
 use crate::heap::QuadHeap;
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, SimplifyOptions};
@@ -47,6 +48,9 @@ pub enum Rejected {
     Duplicate,
     /// The contraction's error exceeds `max_error`.
     Error,
+    /// A feature vertex (seam, material border, hard edge) would leave its
+    /// feature line, or a seam corner would be removed (see `features`).
+    Feature,
 }
 
 /// Rejections counted by reason.
@@ -59,6 +63,7 @@ pub struct Rejections {
     pub degenerate: usize,
     pub duplicate: usize,
     pub error: usize,
+    pub feature: usize,
 }
 
 impl Rejections {
@@ -71,6 +76,7 @@ impl Rejections {
             Rejected::Degenerate => &mut self.degenerate,
             Rejected::Duplicate => &mut self.duplicate,
             Rejected::Error => &mut self.error,
+            Rejected::Feature => &mut self.feature,
         } += 1;
     }
 
@@ -82,6 +88,7 @@ impl Rejections {
             + self.degenerate
             + self.duplicate
             + self.error
+            + self.feature
     }
 }
 
@@ -205,6 +212,11 @@ pub struct Simplifier {
     /// Optional per-vertex multiplier of pair costs (curvature-weighted
     /// modes): a pair costs `cost × max(scale[a], scale[b])`.
     cost_scale: Option<Vec<f32>>,
+    /// Feature edges and wedges, when set (`set_feature_edges`,
+    /// `set_wedges`): feature vertices obey the border rule below.
+    features: Option<Features>,
+    /// Attribute term of the heap key, when set (`set_attributes`).
+    attributes: Option<AttributeCost>,
 }
 
 #[inline]
@@ -347,6 +359,8 @@ impl Simplifier {
             generation: 0,
             scratch: Vec::new(),
             cost_scale: None,
+            features: None,
+            attributes: None,
         };
         // Non-manifold vertices (several fans meeting at one vertex).
         for v in 0..nv as u32 {
@@ -437,14 +451,16 @@ impl Simplifier {
             // placement a corner slides a little along one border line, and
             // the next collapse along the other line cuts it off: borders
             // creep. The constraint planes still price which one goes.
-            (false, false) if self.boundary[a as usize] && !self.boundary[b as usize] => {
+            // Feature vertices follow the same rule (`pinned`), and a seam
+            // corner is never the one removed (`fixed`).
+            (false, false) if self.pinned(a) && !self.pinned(b) || self.fixed(a) => {
                 (pa, q.eval(pa))
             }
-            (false, false) if self.boundary[b as usize] && !self.boundary[a as usize] => {
+            (false, false) if self.pinned(b) && !self.pinned(a) || self.fixed(b) => {
                 (pb, q.eval(pb))
             }
             (false, false) => match self.opts.placement {
-                Placement::Optimal if !self.boundary[a as usize] => q.placement(pa, pb),
+                Placement::Optimal if !self.pinned(a) => q.placement(pa, pb),
                 _ => {
                     let (ca, cb) = (q.eval(pa), q.eval(pb));
                     if cb < ca {
@@ -457,6 +473,18 @@ impl Simplifier {
         }
     }
 
+    /// On a border or a feature line: never moves to a new position.
+    #[inline]
+    fn pinned(&self, v: u32) -> bool {
+        self.boundary[v as usize] || self.features.as_ref().is_some_and(|f| f.pinned(v))
+    }
+
+    /// A seam corner or end: never removed.
+    #[inline]
+    fn fixed(&self, v: u32) -> bool {
+        self.features.as_ref().is_some_and(|f| f.fixed(v))
+    }
+
     /// Multiply every pair's heap key by `max(scale[a], scale[b])` (one
     /// value per vertex, ≥ 0), and rebuild the heap. Errors recorded in the
     /// log stay unscaled quadric errors. Panics if the length is not the
@@ -464,6 +492,125 @@ impl Simplifier {
     pub fn set_cost_scale(&mut self, scale: Vec<f32>) {
         assert_eq!(scale.len(), self.pos.len(), "one scale per vertex");
         self.cost_scale = Some(scale);
+        self.rebuild_heap();
+    }
+
+    /// Treat `edges` (pairs of vertices in the mesh's numbering; edges the
+    /// mesh does not have are ignored) as feature edges: hard edges,
+    /// material borders, seams. Feature vertices move like border vertices
+    /// and only along their feature lines (see `features`); each feature
+    /// edge adds a constraint plane per adjacent face, weighted like a
+    /// border's. Turning features on also makes open borders feature
+    /// edges. Call before the first `step`.
+    pub fn set_feature_edges(&mut self, edges: &[(u32, u32)]) {
+        self.add_features(edges);
+        self.rebuild_heap();
+    }
+
+    /// Track a wedge (the caller's attribute id, e.g. its unwelded vertex
+    /// index) at every triangle corner, `wedges[t][k]` for corner `k` of
+    /// triangle `t` of the mesh given to `new`. Edges across which the
+    /// wedges differ become feature edges (seams); the log records every
+    /// corner's wedge (`ProgressiveMesh::wedges`). Call before the first
+    /// `step`. Panics if the length is not the triangle count (a
+    /// programming error, not input).
+    pub fn set_wedges(&mut self, wedges: Vec<[u32; 3]>) {
+        assert_eq!(
+            wedges.len(),
+            self.tris.len(),
+            "one wedge triple per triangle"
+        );
+        let seams = Features::seams(&self.tris, &wedges);
+        self.add_features(&seams);
+        if let Some(f) = &mut self.features {
+            f.wedges = Some(wedges);
+        }
+        self.rebuild_heap();
+    }
+
+    /// Add an attribute term to every pair's heap key: `values` holds
+    /// `dims` attribute components per vertex (in the mesh's numbering),
+    /// already multiplied by their weights; see `features` for the cost.
+    /// Errors recorded in the log stay geometric. Call before the first
+    /// `step`. Panics if the length is not `dims ×` the vertex count (a
+    /// programming error, not input).
+    pub fn set_attributes(&mut self, values: Vec<f32>, dims: usize) {
+        assert_eq!(
+            values.len(),
+            dims * self.pos.len(),
+            "dims values per vertex"
+        );
+        let mut area = vec![0.0; self.pos.len()];
+        for (t, tri) in self.tris.iter().enumerate() {
+            if self.tri_alive[t] {
+                let [p0, p1, p2] = tri.map(|v| dv(self.pos[v as usize]));
+                let a = (p1 - p0).cross(p2 - p0).length() / 6.0;
+                for &v in tri {
+                    area[v as usize] += a;
+                }
+            }
+        }
+        let diagonal = Mesh {
+            positions: self.pos.clone(),
+            triangles: Vec::new(),
+        }
+        .diagonal();
+        self.attributes = Some(AttributeCost {
+            dims,
+            values,
+            area,
+            scale: diagonal * diagonal,
+        });
+        self.rebuild_heap();
+    }
+
+    fn add_features(&mut self, edges: &[(u32, u32)]) {
+        let nv = self.pos.len();
+        let mut f = self
+            .features
+            .take()
+            .unwrap_or_else(|| Features::new(nv, &self.tris));
+        let weight = match self.opts.boundary {
+            Boundary::Weighted(w) => w,
+            Boundary::Locked => crate::options::DEFAULT_BOUNDARY_WEIGHT,
+        };
+        for &(a, b) in edges {
+            if a as usize >= nv || b as usize >= nv {
+                continue;
+            }
+            let faces: SmallVec<[u32; 2]> = self.vtris[a as usize]
+                .iter()
+                .copied()
+                .filter(|&t| self.tri_alive[t as usize] && self.tris[t as usize].contains(&b))
+                .collect();
+            if faces.is_empty() || !f.add(a, b) {
+                continue;
+            }
+            let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
+            let e = pb - pa;
+            let w = weight
+                * if self.opts.area_weighted {
+                    e.length_squared()
+                } else {
+                    1.0
+                };
+            for t in faces {
+                let c = e.cross(face_normal(&self.pos, &self.tris[t as usize]));
+                let len = c.length();
+                if len > 0.0 && w > 0.0 {
+                    let c = c / len;
+                    let q = Quadric::from_plane(c, -c.dot(pa), w);
+                    let q = Quadric { weight: 0.0, ..q };
+                    self.quadric[a as usize] += q;
+                    self.quadric[b as usize] += q;
+                }
+            }
+        }
+        self.features = Some(f);
+    }
+
+    /// Re-cost every queued pair (after the costs' inputs changed).
+    fn rebuild_heap(&mut self) {
         let mut pairs: Vec<(u32, u32)> = self.heap.drain().map(|e| (e.a, e.b)).collect();
         pairs.retain(|&(a, b)| self.alive[a as usize] && self.alive[b as usize]);
         pairs.sort_unstable();
@@ -474,7 +621,16 @@ impl Simplifier {
 
     fn entry(&self, a: u32, b: u32) -> Entry {
         let (a, b) = (a.min(b), a.max(b));
-        let (_, mut cost) = self.target_of(a, b);
+        let (p, mut cost) = self.target_of(a, b);
+        if let Some(at) = &self.attributes {
+            // the farther endpoint is the one removed (as in `step`)
+            let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
+            cost += if (p - pa).length_squared() <= (p - pb).length_squared() {
+                at.cost(b, a)
+            } else {
+                at.cost(a, b)
+            };
+        }
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
         }
@@ -583,6 +739,9 @@ impl Simplifier {
         if self.locked[i0] && self.locked[i1] {
             return Err(Rejected::Locked);
         }
+        if let Some(f) = &self.features {
+            f.allows(v0, v1)?;
+        }
         // Triangles on both vertices (deleted) and the one-ring of v0.
         let g = self.next_generation();
         let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
@@ -682,6 +841,17 @@ impl Simplifier {
     fn contract(&mut self, v0: u32, v1: u32, p: DVec3, error: f32, removed: SmallVec<[u32; 2]>) {
         let (i0, i1) = (v0 as usize, v1 as usize);
         let merged = fv(p);
+        let edits = self.features.as_ref().map(|f| {
+            let e = f.wedge_edits(
+                [v0, v1],
+                &self.tris,
+                &self.vtris[i0],
+                &self.vtris[i1],
+                &self.tri_alive,
+                &removed,
+            );
+            (e, f.wedges.is_some())
+        });
         let mut record = Contraction {
             v0,
             v1,
@@ -690,6 +860,7 @@ impl Simplifier {
             merged,
             removed,
             moved: Vec::new(),
+            wedges: Vec::new(),
             error,
         };
         for &t in &record.removed {
@@ -711,6 +882,13 @@ impl Simplifier {
                     slot: k as u8,
                 });
                 into.push(t);
+                if let (Some((edits, true)), Some(f)) = (&edits, &mut self.features) {
+                    let e = edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1);
+                    if let Some(w) = f.wedges.as_mut() {
+                        w[t as usize][k] = e[1];
+                    }
+                    record.wedges.push(e);
+                }
             }
         }
         self.vtris[i1] = into;
@@ -720,6 +898,12 @@ impl Simplifier {
         self.alive[i0] = false;
         self.version[i1] = self.version[i1].wrapping_add(1);
         self.boundary[i1] |= self.boundary[i0];
+        if let Some(f) = &mut self.features {
+            f.contract(v0, v1);
+        }
+        if let Some(at) = &mut self.attributes {
+            at.area[i1] += at.area[i0];
+        }
         if !self.partners[i0].is_empty() || !self.partners[i1].is_empty() {
             let mut p = std::mem::take(&mut self.partners[i0]);
             p.append(&mut self.partners[i1]);
@@ -778,6 +962,7 @@ impl Simplifier {
             &self.alive,
             &self.tri_alive,
             &self.log,
+            self.features.as_ref().and_then(|f| f.wedges.as_deref()),
         );
         self.stats.output_triangles = self.live_tris;
         self.stats.output_vertices = pm.base.positions.len();

@@ -757,6 +757,7 @@ impl Engine {
             Rejected::Degenerate => &mut c.degenerate,
             Rejected::Duplicate => &mut c.duplicate,
             Rejected::Error => &mut c.error,
+            Rejected::Feature => &mut c.feature,
         } += 1;
     }
 
@@ -1038,6 +1039,7 @@ impl Engine {
             merged: fv(p),
             removed,
             moved: Vec::new(),
+            wedges: Vec::new(),
             error: error as f32,
         };
         for &t in &record.removed {
@@ -1164,6 +1166,7 @@ impl Engine {
             &self.alive,
             &self.tri_alive,
             &self.log,
+            None,
         );
         self.stats.collapses = self.log.len();
         self.stats.output_triangles = self.live_tris;

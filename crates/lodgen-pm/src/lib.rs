@@ -24,6 +24,7 @@
 pub mod bvh;
 pub mod collapse;
 pub mod curvature;
+pub mod features;
 pub mod heap;
 pub mod levels;
 pub mod measure;
@@ -43,7 +44,7 @@ pub use curvature::{
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
-pub use vsplit::{Corner, Cursor, ProgressiveMesh, VertexSplit};
+pub use vsplit::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 
 /// A simplification's result: the progressive mesh (numbered as in
 /// [`vsplit`]), what preparation removed, what the loop did, and why it
@@ -69,6 +70,72 @@ pub fn simplify(
 ) -> Result<Simplified, MeshError> {
     let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let stop = s.run();
+    let (pm, stats) = s.finish();
+    Ok(Simplified {
+        pm,
+        vertex_map: prepared.vertex_map,
+        triangle_map: prepared.triangle_map,
+        prepare: prepared.stats,
+        stats,
+        stop,
+    })
+}
+
+/// [`simplify`], with attributes kept apart by wedges: `indices` refer to
+/// unwelded vertices, and two corners share a wedge exactly when they share
+/// an index. Positions are welded for topology; every edge across which the
+/// indices differ (a UV seam, a hard edge, a material border when the
+/// caller numbers primitives apart) is a feature edge that collapses only
+/// along itself (see [`features`]). The log carries every corner's wedge
+/// (`pm.wedges`, input vertex indices), so replay restores them exactly.
+///
+/// `attributes` holds `dims` weighted values per input vertex (empty with
+/// `dims == 0`): they add the attribute term of [`features`] to the costs.
+/// Wrong lengths are a [`MeshError::AttributeCount`].
+pub fn simplify_with_wedges(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
+    opts: &SimplifyOptions,
+) -> Result<Simplified, MeshError> {
+    if attributes.len() != dims * positions.len() {
+        return Err(MeshError::AttributeCount {
+            len: attributes.len(),
+            dims,
+            vertex_count: positions.len(),
+        });
+    }
+    let prepared = prepare(positions, indices)?;
+    let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    if dims > 0 {
+        // each welded vertex takes the values of its first input vertex
+        let nw = prepared.mesh.positions.len();
+        let mut values = vec![f32::NAN; dims * nw];
+        for (v, &w) in prepared.vertex_map.iter().enumerate() {
+            let w = w as usize;
+            if w < nw && values[dims * w].is_nan() {
+                values[dims * w..dims * (w + 1)]
+                    .copy_from_slice(&attributes[dims * v..dims * (v + 1)]);
+            }
+        }
+        for x in &mut values {
+            if !x.is_finite() {
+                *x = 0.0;
+            }
+        }
+        s.set_attributes(values, dims);
+    }
+    let wedges = prepared
+        .triangle_map
+        .iter()
+        .map(|&t| {
+            let t = 3 * t as usize;
+            [indices[t], indices[t + 1], indices[t + 2]]
+        })
+        .collect();
+    s.set_wedges(wedges);
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {

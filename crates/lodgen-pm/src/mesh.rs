@@ -33,6 +33,12 @@ pub enum MeshError {
     Empty(&'static str),
     #[error("the mesh has {0} vertices; at most 2^32 - 1 are supported")]
     TooLarge(usize),
+    #[error("{len} attribute values for {vertex_count} vertices of {dims} components")]
+    AttributeCount {
+        len: usize,
+        dims: usize,
+        vertex_count: usize,
+    },
 }
 
 /// The result of [`prepare`]: the welded mesh the simplifier runs on and the

@@ -813,6 +813,9 @@ impl StreamDecoder {
             splits: self.splits,
             vertex_origin: (0..h.total_vertices as u32).collect(),
             triangle_origin: (0..h.total_triangles as u32).collect(),
+            // the stream carries positions and topology only (see
+            // docs/LODGEN_progressive.md)
+            wedges: None,
         };
         Ok((pm, h.levels))
     }

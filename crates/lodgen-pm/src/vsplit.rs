@@ -66,6 +66,30 @@ pub struct ProgressiveMesh {
     pub vertex_origin: Vec<u32>,
     /// Progressive triangle index → triangle of the welded input.
     pub triangle_origin: Vec<u32>,
+    /// Every corner's wedge at every step, when the simplifier tracked
+    /// wedges (`Simplifier::set_wedges`); `None` on the position-only path.
+    pub wedges: Option<WedgeLog>,
+}
+
+/// The wedge payload of the log, parallel to the geometry: the caller's
+/// attribute ids per corner, so a replay restores attributes exactly by
+/// looking them up.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WedgeLog {
+    /// The wedges of `base.triangles`, corner by corner.
+    pub base: Vec<[u32; 3]>,
+    /// Parallel to `ProgressiveMesh::splits`.
+    pub splits: Vec<SplitWedges>,
+}
+
+/// The wedge edits of one vertex split.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SplitWedges {
+    /// The wedges of the split's `faces`.
+    pub faces: SmallVec<[[u32; 3]; 2]>,
+    /// Parallel to the split's `corners`: `[wedge before the split (the
+    /// collapsed state), wedge after it]`.
+    pub corners: Vec<[u32; 2]>,
 }
 
 /// A contraction as the simplifier records it, in the welded input's
@@ -79,6 +103,9 @@ pub(crate) struct Contraction {
     pub merged: [f32; 3],
     pub removed: SmallVec<[u32; 2]>,
     pub moved: Vec<Corner>,
+    /// Parallel to `moved` when wedges are tracked: `[before, after]` the
+    /// contraction. Empty otherwise.
+    pub wedges: Vec<[u32; 2]>,
     pub error: f32,
 }
 
@@ -90,6 +117,7 @@ impl ProgressiveMesh {
         vertex_alive: &[bool],
         triangle_alive: &[bool],
         log: &[Contraction],
+        wedges: Option<&[[u32; 3]]>,
     ) -> ProgressiveMesh {
         const NONE: u32 = u32::MAX;
         let mut vnew = vec![NONE; positions.len()];
@@ -133,19 +161,33 @@ impl ProgressiveMesh {
                 .map(|&t| map(&triangles[t as usize]))
                 .collect(),
         };
+        let mut split_wedges = Vec::with_capacity(if wedges.is_some() { log.len() } else { 0 });
         let splits = log
             .iter()
             .rev()
             .map(|c| {
-                let mut corners: Vec<Corner> = c
+                let mut corners: Vec<(Corner, [u32; 2])> = c
                     .moved
                     .iter()
-                    .map(|k| Corner {
-                        triangle: tnew[k.triangle as usize],
-                        slot: k.slot,
+                    .enumerate()
+                    .map(|(i, k)| {
+                        let corner = Corner {
+                            triangle: tnew[k.triangle as usize],
+                            slot: k.slot,
+                        };
+                        // a split undoes the contraction: after ↔ before
+                        let w = c.wedges.get(i).map_or([0; 2], |w| [w[1], w[0]]);
+                        (corner, w)
                     })
                     .collect();
                 corners.sort_unstable();
+                if let Some(w) = wedges {
+                    split_wedges.push(SplitWedges {
+                        faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
+                        corners: corners.iter().map(|c| c.1).collect(),
+                    });
+                }
+                let corners = corners.into_iter().map(|c| c.0).collect();
                 VertexSplit {
                     v1: vnew[c.v1 as usize],
                     v0: vnew[c.v0 as usize],
@@ -162,11 +204,19 @@ impl ProgressiveMesh {
                 }
             })
             .collect();
+        let wedges = wedges.map(|w| WedgeLog {
+            base: triangle_origin[..base_triangles]
+                .iter()
+                .map(|&t| w[t as usize])
+                .collect(),
+            splits: split_wedges,
+        });
         ProgressiveMesh {
             base,
             splits,
             vertex_origin,
             triangle_origin,
+            wedges,
         }
     }
 
@@ -220,6 +270,7 @@ impl ProgressiveMesh {
         Cursor {
             pm: self,
             mesh: self.base.clone(),
+            wedges: self.wedges.as_ref().map(|w| w.base.clone()),
             applied: 0,
         }
     }
@@ -248,6 +299,8 @@ impl ProgressiveMesh {
 pub struct Cursor<'a> {
     pm: &'a ProgressiveMesh,
     mesh: Mesh,
+    /// The current corners' wedges, when the log has them.
+    wedges: Option<Vec<[u32; 3]>>,
     applied: usize,
 }
 
@@ -266,10 +319,26 @@ impl<'a> Cursor<'a> {
         self.mesh
     }
 
+    /// The wedge of every corner of `mesh()`, when the log has wedges.
+    pub fn wedges(&self) -> Option<&[[u32; 3]]> {
+        self.wedges.as_deref()
+    }
+
     /// Apply up to `n` more splits; returns how many were applied.
     pub fn refine(&mut self, n: usize) -> usize {
         let end = (self.applied + n).min(self.pm.splits.len());
         let done = end - self.applied;
+        if let (Some(cw), Some(log)) = (self.wedges.as_mut(), self.pm.wedges.as_ref()) {
+            for (s, w) in self.pm.splits[self.applied..end]
+                .iter()
+                .zip(&log.splits[self.applied..end])
+            {
+                cw.extend_from_slice(&w.faces);
+                for (c, e) in s.corners.iter().zip(&w.corners) {
+                    cw[c.triangle as usize][c.slot as usize] = e[1];
+                }
+            }
+        }
         for s in &self.pm.splits[self.applied..end] {
             debug_assert_eq!(s.v0 as usize, self.mesh.positions.len());
             self.mesh.positions[s.v1 as usize] = s.p1;
@@ -289,6 +358,18 @@ impl<'a> Cursor<'a> {
     pub fn coarsen(&mut self, n: usize) -> usize {
         let start = self.applied.saturating_sub(n);
         let done = self.applied - start;
+        if let (Some(cw), Some(log)) = (self.wedges.as_mut(), self.pm.wedges.as_ref()) {
+            for (s, w) in self.pm.splits[start..self.applied]
+                .iter()
+                .zip(&log.splits[start..self.applied])
+                .rev()
+            {
+                for (c, e) in s.corners.iter().zip(&w.corners) {
+                    cw[c.triangle as usize][c.slot as usize] = e[0];
+                }
+                cw.truncate(cw.len() - w.faces.len());
+            }
+        }
         for s in self.pm.splits[start..self.applied].iter().rev() {
             for c in &s.corners {
                 self.mesh.triangles[c.triangle as usize][c.slot as usize] = s.v1;

@@ -8,7 +8,7 @@
 
 use crate::gltf_out::{self, Compression, WriteOptions};
 use crate::io;
-use crate::lod::{self, BuildOptions, LevelRequest, MeshBuild, Progress};
+use crate::lod::{self, AttributeWeights, BuildOptions, LevelRequest, MeshBuild, Progress};
 use crate::scene::{Origin, Scene};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -59,6 +59,15 @@ pub struct BuildArgs {
     /// vertices may merge along the border), "locked" never touches them.
     #[arg(long, value_enum, default_value_t = BoundaryMode::Weighted)]
     pub boundary: BoundaryMode,
+
+    /// Weights of attributes in the cost, e.g. "normal=0.5,uv=1,color=0.5"
+    /// (unnamed ones keep their default, 0). 1 makes an attribute
+    /// difference of 1 cost like a displacement by the bounding-box
+    /// diagonal. Seams, hard edges and material borders are kept whatever
+    /// the weights; the term is off by default because on the meshes
+    /// measured it cost more geometry than it saved (docs in ARCHITECTURE.md).
+    #[arg(long, value_name = "LIST", default_value = "normal=0,uv=0,color=0")]
+    pub attribute_weights: String,
 
     /// Weight of the border constraint planes relative to the face planes
     /// (with --boundary weighted; scaled by edge length²).
@@ -210,6 +219,31 @@ pub fn parse_max_errors(list: &str) -> Result<Vec<f64>> {
         .collect()
 }
 
+/// Parse `--attribute-weights`: `name=weight` items (`normal`, `uv`,
+/// `color`), comma-separated; names left out keep their default.
+pub fn parse_attribute_weights(list: &str) -> Result<AttributeWeights> {
+    let mut w = AttributeWeights::DEFAULT;
+    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (name, value) = item.split_once('=').with_context(|| {
+            format!("--attribute-weights: {item:?} must be name=weight, e.g. normal=0.5")
+        })?;
+        let v: f32 = value
+            .trim()
+            .parse()
+            .with_context(|| format!("--attribute-weights: {value:?} is not a number"))?;
+        if !(v >= 0.0 && v.is_finite()) {
+            bail!("--attribute-weights: {item:?} must be finite and non-negative");
+        }
+        match name.trim() {
+            "normal" => w.normal = v,
+            "uv" => w.uv = v,
+            "color" => w.color = v,
+            other => bail!("--attribute-weights: unknown attribute {other:?} (normal, uv, color)"),
+        }
+    }
+    Ok(w)
+}
+
 /// Parse `--tau`: mesh units, or "%" of the bounding-box diagonal.
 pub fn parse_tau(s: &str) -> Result<Tau> {
     let s = s.trim();
@@ -287,6 +321,7 @@ impl BuildArgs {
             method,
             adaptive,
             measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
+            attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
         })
     }
 

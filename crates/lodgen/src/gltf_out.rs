@@ -233,6 +233,11 @@ struct Prepared {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     texcoords: Option<Vec<[f32; 2]>>,
+    tangents: Option<Vec<[f32; 4]>>,
+    extra_texcoords: Vec<Vec<[f32; 2]>>,
+    colors: Option<Vec<[f32; 4]>>,
+    joints: Option<Vec<[u16; 4]>>,
+    weights: Option<Vec<[f32; 4]>>,
     indices: Vec<u32>,
 }
 
@@ -363,6 +368,28 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
             });
         }
     }
+    fn finite<const N: usize>(
+        v: &Option<Vec<[f32; N]>>,
+        attribute: &'static str,
+        check_len: &dyn Fn(&'static str, usize) -> Result<(), LevelProblem>,
+    ) -> Result<(), LevelProblem> {
+        if let Some(v) = v {
+            check_len(attribute, v.len())?;
+            if let Some(vertex) = v.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
+                return Err(LevelProblem::NonFinite { attribute, vertex });
+            }
+        }
+        Ok(())
+    }
+    finite(&p.tangents, "TANGENT", &check_len)?;
+    finite(&p.colors, "COLOR_0", &check_len)?;
+    finite(&p.weights, "WEIGHTS_0", &check_len)?;
+    for uv in &p.extra_texcoords {
+        finite(&Some(uv.clone()), "TEXCOORD_n", &check_len)?;
+    }
+    if let Some(j) = &p.joints {
+        check_len("JOINTS_0", j.len())?;
+    }
     if let Some(vertex) = p
         .positions
         .iter()
@@ -393,15 +420,23 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
             .map(|(g, c)| normalized(*g).unwrap_or(*c))
             .collect(),
     };
-    let texcoords = p
-        .texcoords
-        .as_ref()
-        .map(|uv| order.iter().map(|&o| uv[o as usize]).collect());
+    fn reorder<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
+        order.iter().map(|&o| v[o as usize]).collect()
+    }
     Ok(Some(Prepared {
         material: p.material,
         positions,
         normals,
-        texcoords,
+        texcoords: p.texcoords.as_deref().map(|v| reorder(v, &order)),
+        tangents: p.tangents.as_deref().map(|v| reorder(v, &order)),
+        extra_texcoords: p
+            .extra_texcoords
+            .iter()
+            .map(|v| reorder(v, &order))
+            .collect(),
+        colors: p.colors.as_deref().map(|v| reorder(v, &order)),
+        joints: p.joints.as_deref().map(|v| reorder(v, &order)),
+        weights: p.weights.as_deref().map(|v| reorder(v, &order)),
         indices,
     }))
 }
@@ -745,6 +780,44 @@ impl Builder {
                 json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2"})
             };
             attributes.insert("TEXCOORD_0".into(), self.accessor(accessor).into());
+        }
+
+        // TANGENT, TEXCOORD_1.., COLOR_0, WEIGHTS_0 as floats (allowed with
+        // KHR_mesh_quantization too), JOINTS_0 as u16.
+        let mut floats: Vec<(String, Vec<u8>, usize, &str)> = Vec::new();
+        if let Some(t) = &p.tangents {
+            floats.push(("TANGENT".into(), f32_bytes(t.iter().flatten()), 16, "VEC4"));
+        }
+        for (i, uv) in p.extra_texcoords.iter().enumerate() {
+            let name = format!("TEXCOORD_{}", i + 1);
+            floats.push((name, f32_bytes(uv.iter().flatten()), 8, "VEC2"));
+        }
+        if let Some(c) = &p.colors {
+            floats.push(("COLOR_0".into(), f32_bytes(c.iter().flatten()), 16, "VEC4"));
+        }
+        if let Some(w) = &p.weights {
+            floats.push((
+                "WEIGHTS_0".into(),
+                f32_bytes(w.iter().flatten()),
+                16,
+                "VEC4",
+            ));
+        }
+        for (name, bytes, stride, ty) in floats {
+            let (view, b) = self.view(segment, Payload::Attribute { bytes, stride })?;
+            total += b;
+            let a = self.accessor(
+                json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": ty}),
+            );
+            attributes.insert(name, a.into());
+        }
+        if let Some(j) = &p.joints {
+            let bytes: Vec<u8> = j.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+            let (view, b) = self.view(segment, Payload::Attribute { bytes, stride: 8 })?;
+            total += b;
+            let a = self.accessor(json!({"bufferView": view, "componentType": UNSIGNED_SHORT,
+                                         "count": count, "type": "VEC4"}));
+            attributes.insert("JOINTS_0".into(), a.into());
         }
 
         // Indices: u16 when every index fits below the primitive-restart value.

@@ -60,7 +60,18 @@ pub struct Primitive {
     pub material: Option<usize>,
     pub positions: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
+    /// `TEXCOORD_0`.
     pub texcoords: Option<Vec<[f32; 2]>>,
+    /// `TANGENT`: xyz unit, w = ±1 (bitangent sign).
+    pub tangents: Option<Vec<[f32; 4]>>,
+    /// `TEXCOORD_1`, `TEXCOORD_2`, …: `extra_texcoords[i]` is set `i + 1`.
+    pub extra_texcoords: Vec<Vec<[f32; 2]>>,
+    /// `COLOR_0`, linear RGBA (RGB sources get alpha 1).
+    pub colors: Option<Vec<[f32; 4]>>,
+    /// `JOINTS_0`: four joint indices per vertex.
+    pub joints: Option<Vec<[u16; 4]>>,
+    /// `WEIGHTS_0`: the weights of `joints`, summing to 1.
+    pub weights: Option<Vec<[f32; 4]>>,
     /// Triangle list: `indices.len() % 3 == 0`, every index `< positions.len()`.
     pub indices: Vec<u32>,
 }

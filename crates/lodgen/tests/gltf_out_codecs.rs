@@ -20,6 +20,7 @@ fn textured_scene() -> (Scene, lodgen::scene::LodMesh) {
         normals: None,
         texcoords: Some(uv),
         indices,
+        ..Primitive::default()
     };
     let scene = Scene {
         meshes: vec![SourceMesh {

@@ -20,6 +20,7 @@ fn sphere_scene(n: u32) -> (Scene, Primitive) {
         normals: None,
         texcoords: None,
         indices,
+        ..Primitive::default()
     };
     let scene = Scene {
         meshes: vec![SourceMesh {
@@ -247,6 +248,7 @@ fn several_meshes_u16_and_u32_indices() {
         normals: None,
         texcoords: None,
         indices: i0,
+        ..Primitive::default()
     };
     let quarter = Primitive {
         indices: big.indices[..big.indices.len() / 4].to_vec(),
@@ -445,6 +447,7 @@ fn gltf_scene() -> (Scene, LodMesh) {
         normals: None,
         texcoords: Some(uv),
         indices,
+        ..Primitive::default()
     };
     let doc: gltf_json::Root = serde_json::from_value(serde_json::json!({
         "asset": {"version": "2.0", "copyright": "test"},

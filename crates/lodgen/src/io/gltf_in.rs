@@ -5,7 +5,8 @@
 //! and index checked, so a hostile file yields a [`ReadError`] naming the
 //! JSON path (`meshes[0].primitives[1].indices[6]`) instead of a panic.
 //!
-//! Every primitive of every mesh is read: `POSITION`, `NORMAL`, `TEXCOORD_0`
+//! Every primitive of every mesh is read: `POSITION`, `NORMAL`, `TANGENT`,
+//! `TEXCOORD_n`, `COLOR_0`, `JOINTS_0`, `WEIGHTS_0`
 //! (float, or integer with `normalized`), indices (`u8`/`u16`/`u32`, or
 //! sequential when absent), sparse accessors, and the material index.
 //! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` become triangle lists.
@@ -294,6 +295,56 @@ impl Reader<'_> {
             )?),
             None => None,
         };
+        let optional = |s: Semantic, name: &str| -> Result<Option<Vec<[f32; 4]>>, ReadError> {
+            let Some(a) = attribute(s) else {
+                return Ok(None);
+            };
+            let here = format!("{at}.attributes.{name}");
+            let (values, dims) = self.accessor(root, buffers, a, &here)?;
+            let v: Vec<[f32; 4]> = match dims {
+                // COLOR_n may be RGB: alpha 1
+                3 if name.starts_with("COLOR") => values
+                    .chunks_exact(3)
+                    .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
+                    .collect(),
+                4 => self.vectors(root, buffers, a, &here)?,
+                d => {
+                    return Err(self.json_err(&here, format!("{name} has {d} components")));
+                }
+            };
+            self.same_count(v, n, at, name).map(Some)
+        };
+        let tangents = optional(Semantic::Tangents, "TANGENT")?;
+        let colors = optional(Semantic::Colors(0), "COLOR_0")?;
+        let weights = optional(Semantic::Weights(0), "WEIGHTS_0")?;
+        let joints = match optional(Semantic::Joints(0), "JOINTS_0")? {
+            Some(j) => {
+                if let Some(i) = j.iter().position(|q| {
+                    q.iter()
+                        .any(|&x| !(0.0..=65535.0).contains(&x) || x.fract() != 0.0)
+                }) {
+                    return Err(self.json_err(
+                        &format!("{at}.attributes.JOINTS_0"),
+                        format!("vertex {i} has a joint index that is not a u16: {:?}", j[i]),
+                    ));
+                }
+                Some(j.iter().map(|q| q.map(|x| x as u16)).collect())
+            }
+            None => None,
+        };
+        let mut extra_texcoords = Vec::new();
+        for set in 1.. {
+            let Some(a) = attribute(Semantic::TexCoords(set)) else {
+                break;
+            };
+            let name = format!("TEXCOORD_{set}");
+            extra_texcoords.push(self.same_count(
+                self.vectors(root, buffers, a, &format!("{at}.attributes.{name}"))?,
+                n,
+                at,
+                &name,
+            )?);
+        }
         let ind_at = format!("{at}.indices");
         let raw: Vec<u32> = match prim.indices {
             Some(acc) => {
@@ -351,6 +402,11 @@ impl Reader<'_> {
             positions,
             normals,
             texcoords,
+            tangents,
+            extra_texcoords,
+            colors,
+            joints,
+            weights,
             indices,
         }))
     }

@@ -290,6 +290,11 @@ fn compact(p: Primitive) -> Primitive {
         positions: pick(&p.positions, &order),
         normals: p.normals.as_deref().map(|n| pick(n, &order)),
         texcoords: p.texcoords.as_deref().map(|t| pick(t, &order)),
+        tangents: p.tangents.as_deref().map(|t| pick(t, &order)),
+        extra_texcoords: p.extra_texcoords.iter().map(|t| pick(t, &order)).collect(),
+        colors: p.colors.as_deref().map(|c| pick(c, &order)),
+        joints: p.joints.as_deref().map(|j| pick(j, &order)),
+        weights: p.weights.as_deref().map(|w| pick(w, &order)),
         indices,
     }
 }

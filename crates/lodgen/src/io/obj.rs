@@ -418,5 +418,6 @@ fn build_primitive(
         }),
         normals: has_normals.then(|| p.verts.iter().map(|v| normals[v[2] as usize]).collect()),
         indices: p.indices,
+        ..Primitive::default()
     }
 }

@@ -250,6 +250,7 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         texcoords: (!texcoords.is_empty()).then_some(texcoords),
         positions,
         indices,
+        ..Primitive::default()
     });
     let scene = Scene {
         meshes: vec![SourceMesh {

@@ -76,6 +76,7 @@ pub fn read_smf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         normals: None,
         texcoords: None,
         indices,
+        ..Primitive::default()
     });
     let scene = Scene {
         meshes: vec![SourceMesh {

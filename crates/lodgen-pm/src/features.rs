@@ -1,0 +1,297 @@
+//! Feature edges and wedges: what keeps seams, material borders and hard
+//! edges in place while the welded mesh is simplified.
+//!
+//! Topology runs on welded positions; attributes live on triangle corners.
+//! A *wedge* (Hoppe 1999, "New quadric metric for simplifying meshes with
+//! appearance attributes") is a caller's attribute id at a corner: a UV seam
+//! or a hard edge is two wedges at one position. An edge is a *feature edge*
+//! when the wedges differ across it at either end, when the caller says so
+//! (`Simplifier::set_feature_edges`), or, once features are on, when it is
+//! an open border.
+//!
+//! Vertices are classified by their number of feature edges, as in
+//! meshoptimizer's `kCanCollapse` (manifold / border / seam / locked):
+//!
+//! | feature edges | kind | may be removed |
+//! |---|---|---|
+//! | 0 | [`Kind::Free`] | into any neighbour (pulled onto it if it is not free) |
+//! | 2 | [`Kind::Line`] | only along one of its two feature edges, into the other end |
+//! | 1, 3+ | [`Kind::Corner`] | never (seam ends and seam junctions stay put) |
+//!
+//! So a seam collapses only along itself, both sides at once (one welded
+//! vertex carries both sides' corners), and two feature vertices joined by a
+//! non-feature edge never merge (that would pinch the seam).
+//!
+//! Wedge tracking: when `v0` is contracted into `v1`, each corner of `v0`
+//! takes the wedge `v1` has in the deleted triangle of its *sector* (the
+//! triangles of `v0`'s fan reachable without crossing a feature edge). The
+//! old and new wedge of each moved corner go into the log, so a replay
+//! restores every corner's wedge exactly.
+//!
+//! Attribute error (a simplified Hoppe 1999 / meshoptimizer attribute
+//! metric): a contraction that removes `v0` replaces the attributes of
+//! `v0`'s fan with those of `v1`'s wedges, so it costs
+//! `area(fan of v0) · |a(v0) − a(v1)|²` with attributes pre-multiplied by
+//! the caller's weights, and scaled by the squared bounding-box diagonal so
+//! that an attribute difference of 1 at weight 1 weighs like a displacement
+//! of the whole mesh's size (meshoptimizer's convention, which works in a
+//! unit cube). Attribute values are those of one representative wedge per
+//! vertex; new values are never interpolated (the wedge of `v1` is kept),
+//! which is what the cost measures.
+//!
+//! Owns [`Features`], [`Kind`] and [`AttributeCost`]. The contraction rules
+//! that consult them are in `collapse` (`target_of`, `check`, `contract`,
+//! `entry`).
+
+use crate::collapse::Rejected;
+use smallvec::SmallVec;
+
+/// How a vertex may move, from its feature-edge count (module table).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Free,
+    Line,
+    Corner,
+}
+
+impl Kind {
+    fn of(feature_edges: usize) -> Kind {
+        match feature_edges {
+            0 => Kind::Free,
+            2 => Kind::Line,
+            _ => Kind::Corner,
+        }
+    }
+}
+
+/// Feature classification plus, optionally, per-corner wedges.
+#[derive(Clone, Debug)]
+pub(crate) struct Features {
+    /// Vertex → its feature neighbours (feature and border edges).
+    pub nbrs: Vec<SmallVec<[u32; 4]>>,
+    pub kind: Vec<Kind>,
+    /// Triangle → the wedge of each corner, when tracked. Dead triangles
+    /// keep the wedges they had when they died.
+    pub wedges: Option<Vec<[u32; 3]>>,
+}
+
+/// One moved corner's wedge edit: `(triangle, [wedge before, wedge after])`.
+pub(crate) type WedgeEdits = SmallVec<[(u32, [u32; 2]); 16]>;
+
+impl Features {
+    /// Border edges of `tris` as the first feature edges.
+    pub fn new(nv: usize, tris: &[[u32; 3]]) -> Features {
+        let mut f = Features {
+            nbrs: vec![SmallVec::new(); nv],
+            kind: vec![Kind::Free; nv],
+            wedges: None,
+        };
+        let mut half = edge_uses(tris);
+        half.sort_unstable();
+        for run in half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            if run.len() == 1 {
+                f.add(run[0].0, run[0].1);
+            }
+        }
+        f
+    }
+
+    /// Mark `a–b` as a feature edge; `false` if it already was one.
+    pub fn add(&mut self, a: u32, b: u32) -> bool {
+        if a == b || self.nbrs[a as usize].contains(&b) {
+            return false;
+        }
+        self.nbrs[a as usize].push(b);
+        self.nbrs[b as usize].push(a);
+        for v in [a, b] {
+            self.kind[v as usize] = Kind::of(self.nbrs[v as usize].len());
+        }
+        true
+    }
+
+    /// The interior edges across which the wedges of `wedges` differ.
+    pub fn seams(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> Vec<(u32, u32)> {
+        let mut half = edge_uses(tris);
+        half.sort_unstable();
+        let wedge_at = |t: u32, v: u32| {
+            let tri = tris[t as usize];
+            let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+            wedges[t as usize][k]
+        };
+        let mut out = Vec::new();
+        for run in half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            let (a, b) = (run[0].0, run[0].1);
+            let differ = run[1..].iter().any(|u| {
+                wedge_at(u.2, a) != wedge_at(run[0].2, a)
+                    || wedge_at(u.2, b) != wedge_at(run[0].2, b)
+            });
+            if run.len() > 1 && differ {
+                out.push((a, b));
+            }
+        }
+        out
+    }
+
+    /// `v` never moves to a new position (it is on a feature line).
+    #[inline]
+    pub fn pinned(&self, v: u32) -> bool {
+        self.kind[v as usize] != Kind::Free
+    }
+
+    /// `v` may not be the removed vertex of any contraction.
+    #[inline]
+    pub fn fixed(&self, v: u32) -> bool {
+        self.kind[v as usize] == Kind::Corner
+    }
+
+    /// The feature rule for removing `v0` into `v1`.
+    pub fn allows(&self, v0: u32, v1: u32) -> Result<(), Rejected> {
+        match self.kind[v0 as usize] {
+            Kind::Free => Ok(()),
+            Kind::Line if self.nbrs[v0 as usize].contains(&v1) => Ok(()),
+            Kind::Line | Kind::Corner => Err(Rejected::Feature),
+        }
+    }
+
+    /// The new wedge of every corner of `v0` (contracted into `v1`) in the live, not removed
+    /// triangles of `fan0` (sector by sector, module docs). Call before the
+    /// contraction edits anything. Empty when wedges are not tracked.
+    pub fn wedge_edits(
+        &self,
+        [v0, v1]: [u32; 2],
+        tris: &[[u32; 3]],
+        fan0: &[u32],
+        fan1: &[u32],
+        alive: &[bool],
+        removed: &[u32],
+    ) -> WedgeEdits {
+        let mut out = WedgeEdits::new();
+        let Some(w) = &self.wedges else {
+            return out;
+        };
+        let slot = |t: u32, v: u32| tris[t as usize].iter().position(|&x| x == v);
+        let wedge = |t: u32, v: u32| slot(t, v).map(|k| w[t as usize][k]);
+        let fan: SmallVec<[u32; 16]> = fan0
+            .iter()
+            .copied()
+            .filter(|&t| alive[t as usize])
+            .collect();
+        // Sectors: union-find over the fan, joined across non-feature edges
+        // (v0, y). Fans are small: a quadratic scan is cheapest.
+        let mut comp: SmallVec<[usize; 16]> = (0..fan.len()).collect();
+        let feature = &self.nbrs[v0 as usize];
+        let mut changed = true;
+        while changed {
+            changed = false;
+            for i in 0..fan.len() {
+                for j in i + 1..fan.len() {
+                    if comp[i] == comp[j] {
+                        continue;
+                    }
+                    let (ti, tj) = (tris[fan[i] as usize], tris[fan[j] as usize]);
+                    let joined = ti
+                        .iter()
+                        .any(|&y| y != v0 && tj.contains(&y) && !feature.contains(&y));
+                    if joined {
+                        let m = comp[i].min(comp[j]);
+                        comp[i] = m;
+                        comp[j] = m;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        // v1's wedge in each sector, from the deleted triangle(s) in it.
+        let mut sector_wedge: SmallVec<[(usize, u32); 2]> = SmallVec::new();
+        for (i, &t) in fan.iter().enumerate() {
+            if removed.contains(&t) {
+                if let Some(x) = wedge(t, v1) {
+                    sector_wedge.push((comp[i], x));
+                }
+            }
+        }
+        // A sector without a deleted triangle (a τ-pair): v1's first wedge.
+        let fallback = sector_wedge.first().map(|s| s.1).or_else(|| {
+            fan1.iter()
+                .filter(|&&t| alive[t as usize])
+                .find_map(|&t| wedge(t, v1))
+        });
+        for (i, &t) in fan.iter().enumerate() {
+            if removed.contains(&t) {
+                continue;
+            }
+            let Some(old) = wedge(t, v0) else { continue };
+            let new = sector_wedge
+                .iter()
+                .find(|s| s.0 == comp[i])
+                .map(|s| s.1)
+                .or(fallback)
+                .unwrap_or(old);
+            out.push((t, [old, new]));
+        }
+        out
+    }
+
+    /// Update the feature lines after `v0` merged into `v1`.
+    pub fn contract(&mut self, v0: u32, v1: u32) {
+        let moved = std::mem::take(&mut self.nbrs[v0 as usize]);
+        self.kind[v0 as usize] = Kind::Free;
+        self.nbrs[v1 as usize].retain(|x| *x != v0);
+        for x in moved {
+            if x == v1 {
+                continue;
+            }
+            let nx = &mut self.nbrs[x as usize];
+            nx.retain(|y| *y != v0);
+            if !nx.contains(&v1) {
+                nx.push(v1);
+            }
+            self.kind[x as usize] = Kind::of(nx.len());
+            if !self.nbrs[v1 as usize].contains(&x) {
+                self.nbrs[v1 as usize].push(x);
+            }
+        }
+        self.kind[v1 as usize] = Kind::of(self.nbrs[v1 as usize].len());
+    }
+}
+
+/// Every triangle edge as `(min, max, triangle)`.
+fn edge_uses(tris: &[[u32; 3]]) -> Vec<(u32, u32, u32)> {
+    let mut half = Vec::with_capacity(3 * tris.len());
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            half.push((a.min(b), a.max(b), i as u32));
+        }
+    }
+    half
+}
+
+/// Per-vertex attributes for the attribute term of the cost (module docs).
+#[derive(Clone, Debug)]
+pub(crate) struct AttributeCost {
+    /// Components per vertex.
+    pub dims: usize,
+    /// `dims` weighted values per vertex.
+    pub values: Vec<f32>,
+    /// Area of the triangles around each vertex (a third of each), grown
+    /// by contractions.
+    pub area: Vec<f64>,
+    /// Squared bounding-box diagonal (module docs).
+    pub scale: f64,
+}
+
+impl AttributeCost {
+    /// The added cost of removing `v0` into `v1`.
+    #[inline]
+    pub fn cost(&self, v0: u32, v1: u32) -> f64 {
+        let d = self.dims;
+        let (a, b) = (v0 as usize * d, v1 as usize * d);
+        let diff: f64 = self.values[a..a + d]
+            .iter()
+            .zip(&self.values[b..b + d])
+            .map(|(x, y)| f64::from(x - y).powi(2))
+            .sum();
+        self.scale * self.area[v0 as usize] * diff
+    }
+}
