@@ -12,79 +12,15 @@ use lodgen::scene::{LodLevel, LodMesh, Primitive};
 use serde_json::Value;
 
 /// An icosphere of radius `r` around `center`, subdivided `n` times
-/// (20 * 4^n triangles), welded.
+/// (20 * 4^n triangles), welded: `lodgen_pm::shapes::icosphere`, moved.
 pub fn icosphere(n: u32, r: f32, center: [f32; 3]) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut pos: Vec<[f32; 3]> = vec![
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ];
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..n {
-        let mut mids: std::collections::BTreeMap<(u32, u32), u32> = Default::default();
-        let mut mid = |a: u32, b: u32, pos: &mut Vec<[f32; 3]>| {
-            *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let (p, q) = (pos[a as usize], pos[b as usize]);
-                pos.push([
-                    (p[0] + q[0]) / 2.0,
-                    (p[1] + q[1]) / 2.0,
-                    (p[2] + q[2]) / 2.0,
-                ]);
-                pos.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let ab = mid(a, b, &mut pos);
-            let bc = mid(b, c, &mut pos);
-            let ca = mid(c, a, &mut pos);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    let pos = pos
+    let m = lodgen_pm::shapes::icosphere(n);
+    let pos = m
+        .positions
         .iter()
-        .map(|p| {
-            let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            [
-                center[0] + r * p[0] / l,
-                center[1] + r * p[1] / l,
-                center[2] + r * p[2] / l,
-            ]
-        })
+        .map(|p| [0, 1, 2].map(|k| center[k] + r * p[k]))
         .collect();
-    (pos, tris.into_iter().flatten().collect())
+    (pos, m.indices())
 }
 
 /// Spherical UVs in [0, 1].
