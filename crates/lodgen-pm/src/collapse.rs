@@ -787,53 +787,18 @@ impl Simplifier {
         if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
             return Err(Rejected::Link);
         }
-        // Flip and degeneracy of every triangle that moves.
-        for (moving, other) in [(v0, v1), (v1, v0)] {
-            for &t in &self.vtris[moving as usize] {
-                if !self.tri_alive[t as usize] {
-                    continue;
-                }
-                let tri = self.tris[t as usize];
-                if tri.contains(&other) {
-                    continue;
-                }
-                let old = tri.map(|v| dv(self.pos[v as usize]));
-                let new = tri.map(|v| {
-                    if v == moving {
-                        p
-                    } else {
-                        dv(self.pos[v as usize])
-                    }
-                });
-                let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
-                let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
-                let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
-                if l_old > 0.0 {
-                    if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
-                        return Err(Rejected::Degenerate);
-                    }
-                    if n_old.dot(n_new) < FLIP_MIN_COS * (l_old * l_new).sqrt() {
-                        return Err(Rejected::Flip);
-                    }
-                }
-            }
-        }
-        // A moved triangle must not land on an existing one.
-        for &t in &self.vtris[i0] {
-            if !self.tri_alive[t as usize] || shared.contains(&t) {
-                continue;
-            }
-            let tri = self.tris[t as usize];
-            let xy: SmallVec<[u32; 2]> = tri.iter().copied().filter(|&x| x != v0).collect();
-            for &u in &self.vtris[i1] {
-                if self.tri_alive[u as usize] && !shared.contains(&u) {
-                    let o = self.tris[u as usize];
-                    if o.contains(&xy[0]) && o.contains(&xy[1]) {
-                        return Err(Rejected::Duplicate);
-                    }
-                }
-            }
-        }
+        moved_faces_ok(
+            Faces {
+                tris: &self.tris,
+                alive: &self.tri_alive,
+                vtris: &self.vtris,
+                pos: &self.pos,
+            },
+            v0,
+            v1,
+            p,
+            &shared,
+        )?;
         Ok(shared)
     }
 
@@ -974,4 +939,74 @@ impl Simplifier {
 fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
     let [p0, p1, p2] = t.map(|v| dv(positions[v as usize]));
     (p1 - p0).cross(p2 - p0).normalize_or_zero()
+}
+
+/// The mesh state the legality tests read (shared by `Simplifier` and the
+/// curvature-adaptive sweeps).
+#[derive(Clone, Copy)]
+pub(crate) struct Faces<'a> {
+    pub tris: &'a [[u32; 3]],
+    pub alive: &'a [bool],
+    pub vtris: &'a [Vec<u32>],
+    pub pos: &'a [[f32; 3]],
+}
+
+/// The geometric legality of contracting `v0` into `v1` at `p`, `shared`
+/// being the triangles on both (deleted): no moved face may flip (turn by
+/// more than [`FLIP_MIN_COS`]) or collapse to a sliver
+/// ([`DEGENERATE_AREA_RATIO_SQ`]), and no moved face may land on an existing
+/// one (a tetrahedron or small closed part flattening into a sheet).
+pub(crate) fn moved_faces_ok(
+    f: Faces<'_>,
+    v0: u32,
+    v1: u32,
+    p: DVec3,
+    shared: &[u32],
+) -> Result<(), Rejected> {
+    for (moving, other) in [(v0, v1), (v1, v0)] {
+        for &t in &f.vtris[moving as usize] {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            let tri = f.tris[t as usize];
+            if tri.contains(&other) {
+                continue;
+            }
+            let old = tri.map(|v| dv(f.pos[v as usize]));
+            let new = tri.map(|v| {
+                if v == moving {
+                    p
+                } else {
+                    dv(f.pos[v as usize])
+                }
+            });
+            let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+            let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+            let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
+            if l_old > 0.0 {
+                if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
+                    return Err(Rejected::Degenerate);
+                }
+                if n_old.dot(n_new) < FLIP_MIN_COS * (l_old * l_new).sqrt() {
+                    return Err(Rejected::Flip);
+                }
+            }
+        }
+    }
+    for &t in &f.vtris[v0 as usize] {
+        if !f.alive[t as usize] || shared.contains(&t) {
+            continue;
+        }
+        let tri = f.tris[t as usize];
+        let xy: SmallVec<[u32; 2]> = tri.iter().copied().filter(|&x| x != v0).collect();
+        for &u in &f.vtris[v1 as usize] {
+            if f.alive[u as usize] && !shared.contains(&u) {
+                let o = f.tris[u as usize];
+                if o.contains(&xy[0]) && o.contains(&xy[1]) {
+                    return Err(Rejected::Duplicate);
+                }
+            }
+        }
+    }
+    Ok(())
 }

@@ -29,7 +29,7 @@
 //!    ([`AdaptiveStop`] says why).
 //!
 //! Algorithm 5's defects are *prevented* by the core's legality rules
-//! (link condition, [`FLIP_MIN_COS`] flip test, [`DEGENERATE_AREA_RATIO_SQ`],
+//! (link condition, [`FLIP_MIN_COS`](crate::collapse::FLIP_MIN_COS) flip test, [`DEGENERATE_AREA_RATIO_SQ`](crate::collapse::DEGENERATE_AREA_RATIO_SQ),
 //! duplicate-triangle test), counted in [`AdaptiveReport::prevented`]. What
 //! still occurs after a legal operation (two triangles on the same three
 //! vertices — the paper's "spikes"; a valence-3 "pyramid" whose one face turns
@@ -64,8 +64,7 @@
 //! engine. Does no I/O and never prints.
 
 use crate::collapse::{
-    PhaseTimes, Rejected, Rejections, Simplifier, Stats, StopReason, DEGENERATE_AREA_RATIO_SQ,
-    FLIP_MIN_COS,
+    moved_faces_ok, Faces, PhaseTimes, Rejected, Rejections, Simplifier, Stats, StopReason,
 };
 use crate::mesh::{prepare, Mesh, MeshError};
 use crate::options::SimplifyOptions;
@@ -925,8 +924,8 @@ impl Engine {
     }
 
     /// The core's legality rules, in its order: the edge must be interior
-    /// with two triangles, link condition, flip ([`FLIP_MIN_COS`]) and
-    /// degeneracy ([`DEGENERATE_AREA_RATIO_SQ`]) of every moved triangle, no
+    /// with two triangles, link condition, flip ([`FLIP_MIN_COS`](crate::collapse::FLIP_MIN_COS)) and
+    /// degeneracy ([`DEGENERATE_AREA_RATIO_SQ`](crate::collapse::DEGENERATE_AREA_RATIO_SQ)) of every moved triangle, no
     /// moved triangle landing on an existing one.
     fn check(&mut self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
         let (i0, i1) = (v0 as usize, v1 as usize);
@@ -972,51 +971,18 @@ impl Engine {
         if common != 2 || opposite[0] == opposite[1] {
             return Err(Rejected::Link);
         }
-        for (moving, other) in [(v0, v1), (v1, v0)] {
-            for &t in &self.vtris[moving as usize] {
-                if !self.tri_alive[t as usize] {
-                    continue;
-                }
-                let tri = self.tris[t as usize];
-                if tri.contains(&other) {
-                    continue;
-                }
-                let old = tri.map(|v| dv(self.pos[v as usize]));
-                let new = tri.map(|v| {
-                    if v == moving {
-                        p
-                    } else {
-                        dv(self.pos[v as usize])
-                    }
-                });
-                let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
-                let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
-                let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
-                if l_old > 0.0 {
-                    if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
-                        return Err(Rejected::Degenerate);
-                    }
-                    if n_old.dot(n_new) < FLIP_MIN_COS * (l_old * l_new).sqrt() {
-                        return Err(Rejected::Flip);
-                    }
-                }
-            }
-        }
-        for &t in &self.vtris[i0] {
-            if !self.tri_alive[t as usize] || shared.contains(&t) {
-                continue;
-            }
-            let tri = self.tris[t as usize];
-            let xy: SmallVec<[u32; 2]> = tri.iter().copied().filter(|&x| x != v0).collect();
-            for &u in &self.vtris[i1] {
-                if self.tri_alive[u as usize] && !shared.contains(&u) {
-                    let o = self.tris[u as usize];
-                    if o.contains(&xy[0]) && o.contains(&xy[1]) {
-                        return Err(Rejected::Duplicate);
-                    }
-                }
-            }
-        }
+        moved_faces_ok(
+            Faces {
+                tris: &self.tris,
+                alive: &self.tri_alive,
+                vtris: &self.vtris,
+                pos: &self.pos,
+            },
+            v0,
+            v1,
+            p,
+            &shared,
+        )?;
         Ok(shared)
     }
 
