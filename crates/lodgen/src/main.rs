@@ -37,10 +37,11 @@ enum Command {
         /// A .glb or .gltf file.
         file: PathBuf,
     },
-    /// Print the distance between two meshes (any readable format; every
-    /// mesh of each file, in world space of its own file, is merged): one-
-    /// sided and symmetric Hausdorff, mean and RMS, absolute and in % of A's
-    /// bounding-box diagonal. For a LOD file, its finest level is used.
+    /// Print the distance between two meshes (any readable format; the
+    /// meshes each file's scene draws are merged, node transforms not
+    /// applied): one-sided and symmetric Hausdorff, mean and RMS, absolute
+    /// and in % of A's bounding-box diagonal. For a LOD file, its finest
+    /// level is used.
     Measure(MeasureArgs),
     /// Serve a WebGL2 viewer on 127.0.0.1 that shows the coarsest level and
     /// streams the vertex-split log (LODGEN_progressive) to refine it, with a
