@@ -9,17 +9,29 @@
 //!
 //! Owns only the ordering container; what an entry means is `collapse`'s.
 
+/// Logical node `i` lives at `data[i + PAD]`: with the root at slot 3, the
+/// four children of any node (`4i+1 ..= 4i+4`, slots `4(i+1) ..`) start on a
+/// multiple of four entries, i.e. on one 64-byte line for 16-byte entries.
+const PAD: usize = 3;
+
 /// A 4-ary min-heap ordered by `Ord` (smallest first).
 #[derive(Clone, Debug, Default)]
 pub struct QuadHeap<T> {
+    /// `PAD` filler slots, then the heap.
     data: Vec<T>,
 }
 
 impl<T: Ord + Copy> QuadHeap<T> {
     /// Build from unordered items in O(n).
-    pub fn from_vec(data: Vec<T>) -> Self {
+    pub fn from_vec(items: Vec<T>) -> Self {
+        let Some(&first) = items.first() else {
+            return QuadHeap { data: Vec::new() };
+        };
+        let mut data = Vec::with_capacity(items.len() + PAD);
+        data.extend(std::iter::repeat_n(first, PAD));
+        data.extend_from_slice(&items);
         let mut h = QuadHeap { data };
-        let n = h.data.len();
+        let n = h.len();
         if n > 1 {
             for i in (0..=(n - 2) / 4).rev() {
                 h.sift_down(i);
@@ -29,47 +41,55 @@ impl<T: Ord + Copy> QuadHeap<T> {
     }
 
     pub fn len(&self) -> usize {
-        self.data.len()
+        self.data.len().saturating_sub(PAD)
     }
 
     pub fn is_empty(&self) -> bool {
-        self.data.is_empty()
+        self.len() == 0
     }
 
     pub fn push(&mut self, item: T) {
+        if self.data.is_empty() {
+            self.data.extend(std::iter::repeat_n(item, PAD));
+        }
         self.data.push(item);
-        let mut i = self.data.len() - 1;
+        let mut i = self.len() - 1;
         while i > 0 {
             let parent = (i - 1) / 4;
-            if item < self.data[parent] {
-                self.data[i] = self.data[parent];
+            if item < self.data[parent + PAD] {
+                self.data[i + PAD] = self.data[parent + PAD];
                 i = parent;
             } else {
                 break;
             }
         }
-        self.data[i] = item;
+        self.data[i + PAD] = item;
     }
 
     pub fn pop(&mut self) -> Option<T> {
+        if self.is_empty() {
+            return None;
+        }
         let last = self.data.pop()?;
-        if self.data.is_empty() {
+        if self.is_empty() {
             return Some(last);
         }
-        let top = self.data[0];
-        self.data[0] = last;
+        let top = self.data[PAD];
+        self.data[PAD] = last;
         self.sift_down(0);
         Some(top)
     }
 
     /// Remove every item (in no particular order).
     pub fn drain(&mut self) -> std::vec::Drain<'_, T> {
-        self.data.drain(..)
+        let start = PAD.min(self.data.len());
+        self.data.drain(start..)
     }
 
     fn sift_down(&mut self, mut i: usize) {
-        let n = self.data.len();
-        let item = self.data[i];
+        let d = &mut self.data[PAD..];
+        let n = d.len();
+        let item = d[i];
         loop {
             let first = 4 * i + 1;
             if first >= n {
@@ -78,18 +98,18 @@ impl<T: Ord + Copy> QuadHeap<T> {
             let end = (first + 4).min(n);
             let mut best = first;
             for c in first + 1..end {
-                if self.data[c] < self.data[best] {
+                if d[c] < d[best] {
                     best = c;
                 }
             }
-            if self.data[best] < item {
-                self.data[i] = self.data[best];
+            if d[best] < item {
+                d[i] = d[best];
                 i = best;
             } else {
                 break;
             }
         }
-        self.data[i] = item;
+        d[i] = item;
     }
 }
 
