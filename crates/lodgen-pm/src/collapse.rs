@@ -364,7 +364,7 @@ impl Simplifier {
         };
         // Non-manifold vertices (several fans meeting at one vertex).
         for v in 0..nv as u32 {
-            if !s.locked[v as usize] && s.fan_count(v) > 1 {
+            if !s.locked[v as usize] && fan_count(&s.tris, v, &s.vtris[v as usize]) > 1 {
                 s.locked[v as usize] = true;
             }
         }
@@ -399,43 +399,6 @@ impl Simplifier {
         stats.time.heap = t2.elapsed();
         s.stats = stats;
         Ok(s)
-    }
-
-    /// Number of edge-connected fans of triangles around `v` (1 for a
-    /// manifold vertex).
-    fn fan_count(&mut self, v: u32) -> usize {
-        // Union-find over the triangles of v, joined across shared edges
-        // (v, x): small, so a quadratic scan is cheapest.
-        let ts = &self.vtris[v as usize];
-        let n = ts.len();
-        if n <= 1 {
-            return n;
-        }
-        let mut comp: SmallVec<[u32; 16]> = (0..n as u32).collect();
-        let others = |t: u32| -> [u32; 2] {
-            let tri = self.tris[t as usize];
-            let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-            [tri[(k + 1) % 3], tri[(k + 2) % 3]]
-        };
-        let mut changed = true;
-        while changed {
-            changed = false;
-            for i in 0..n {
-                let oi = others(ts[i]);
-                for j in i + 1..n {
-                    let oj = others(ts[j]);
-                    if oi.iter().any(|x| oj.contains(x)) && comp[i] != comp[j] {
-                        let m = comp[i].min(comp[j]);
-                        comp[i] = m;
-                        comp[j] = m;
-                        changed = true;
-                    }
-                }
-            }
-        }
-        comp.sort_unstable();
-        comp.dedup();
-        comp.len()
     }
 
     /// The contraction target and cost of the pair `(a, b)`.
@@ -1009,4 +972,37 @@ pub(crate) fn moved_faces_ok(
         }
     }
     Ok(())
+}
+
+/// Edge-connected fans of triangles around `v` (1 for a manifold vertex).
+pub(crate) fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
+    let n = ts.len();
+    if n <= 1 {
+        return n;
+    }
+    let others = |t: u32| -> [u32; 2] {
+        let tri = tris[t as usize];
+        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+        [tri[(k + 1) % 3], tri[(k + 2) % 3]]
+    };
+    let mut comp: SmallVec<[u32; 16]> = (0..n as u32).collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for i in 0..n {
+            let oi = others(ts[i]);
+            for j in i + 1..n {
+                let oj = others(ts[j]);
+                if oi.iter().any(|x| oj.contains(x)) && comp[i] != comp[j] {
+                    let m = comp[i].min(comp[j]);
+                    comp[i] = m;
+                    comp[j] = m;
+                    changed = true;
+                }
+            }
+        }
+    }
+    comp.sort_unstable();
+    comp.dedup();
+    comp.len()
 }

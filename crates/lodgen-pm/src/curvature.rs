@@ -64,7 +64,8 @@
 //! engine. Does no I/O and never prints.
 
 use crate::collapse::{
-    moved_faces_ok, Faces, PhaseTimes, Rejected, Rejections, Simplifier, Stats, StopReason,
+    fan_count, moved_faces_ok, Faces, PhaseTimes, Rejected, Rejections, Simplifier, Stats,
+    StopReason,
 };
 use crate::mesh::{prepare, Mesh, MeshError};
 use crate::options::SimplifyOptions;
@@ -388,39 +389,6 @@ fn fixed_vertices(mesh: &Mesh, vtris: &[Vec<u32>]) -> Vec<bool> {
         }
     }
     fixed
-}
-
-/// Edge-connected fans of triangles around `v` (1 for a manifold vertex).
-fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
-    let n = ts.len();
-    if n <= 1 {
-        return n;
-    }
-    let others = |t: u32| -> [u32; 2] {
-        let tri = tris[t as usize];
-        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-        [tri[(k + 1) % 3], tri[(k + 2) % 3]]
-    };
-    let mut comp: SmallVec<[u32; 16]> = (0..n as u32).collect();
-    let mut changed = true;
-    while changed {
-        changed = false;
-        for i in 0..n {
-            let oi = others(ts[i]);
-            for j in i + 1..n {
-                let oj = others(ts[j]);
-                if oi.iter().any(|x| oj.contains(x)) && comp[i] != comp[j] {
-                    let m = comp[i].min(comp[j]);
-                    comp[i] = m;
-                    comp[j] = m;
-                    changed = true;
-                }
-            }
-        }
-    }
-    comp.sort_unstable();
-    comp.dedup();
-    comp.len()
 }
 
 /// Algorithm 3: the average normal deviation θ (radians, in [0, π]) of every
