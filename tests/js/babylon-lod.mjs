@@ -281,8 +281,14 @@ function compare(pairs, result) {
     const want = [...m.levels].reverse().map((l) => l.triangles); // coarse first
     const problems = [];
     if (c.nodes.length !== n) problems.push(`file has ${c.nodes.length} levels, report ${n}`);
-    // 1. The order in which Babylon enabled this chain's nodes, with their triangles.
-    const en = result.enabled[c.key] ?? [];
+    // 1. The order in which Babylon shows this chain's levels, with their
+    // triangles: the enabled node of the chain at each node-LOD event, in
+    // event order. (onEnabledStateChanged alone misses the coarsest level
+    // when it is enabled before the observer is attached: a small file
+    // loads that fast.)
+    const en = [...result.events]
+      .sort((a, b) => a.indexLOD - b.indexLOD)
+      .flatMap((ev) => (ev.chains[c.key] ?? []).filter((l) => l.enabled).slice(0, 1));
     const enNodes = en.map((e) => e.node);
     if (enNodes.join() !== c.nodes.join())
       problems.push(`Babylon enabled nodes [${enNodes}], expected coarse-to-fine [${c.nodes}]`);
