@@ -1,0 +1,106 @@
+//! Phase times of one simplification (prepare, setup, pairs, heap, loop,
+//! log, level extraction), to see where the time goes.
+//!
+//! `cargo run --release -p lodgen-pm --example profile_simplify [path/to/mesh.obj] [subdivisions] [ratio]`
+
+use std::time::Instant;
+
+use lodgen_pm::{prepare, Mesh, Simplifier, SimplifyOptions};
+
+fn load_obj(path: &str) -> Mesh {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let c: Vec<f32> = w.take(3).map(|s| s.parse().unwrap()).collect();
+                positions.push([c[0], c[1], c[2]]);
+            }
+            Some("f") => {
+                let c: Vec<u32> = w
+                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                for k in 1..c.len() - 1 {
+                    triangles.push([c[0], c[k], c[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// 4-to-1 midpoint subdivision.
+fn subdivide(m: &Mesh) -> Mesh {
+    let mut positions = m.positions.clone();
+    let mut mid = std::collections::BTreeMap::new();
+    let mut triangles = Vec::with_capacity(4 * m.triangles.len());
+    let mut midpoint = |a: u32, b: u32, positions: &mut Vec<[f32; 3]>| -> u32 {
+        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            let (p, q) = (positions[a as usize], positions[b as usize]);
+            positions.push([0, 1, 2].map(|k| 0.5 * (p[k] + q[k])));
+            positions.len() as u32 - 1
+        })
+    };
+    for &[a, b, c] in &m.triangles {
+        let ab = midpoint(a, b, &mut positions);
+        let bc = midpoint(b, c, &mut positions);
+        let ca = midpoint(c, a, &mut positions);
+        triangles.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args
+        .get(1)
+        .cloned()
+        .unwrap_or_else(|| "../shared/assets/bunny.obj".into());
+    let subdivisions: usize = args.get(2).map_or(0, |s| s.parse().unwrap());
+    let ratio: f64 = args.get(3).map_or(0.02, |s| s.parse().unwrap());
+    let mut m = load_obj(&path);
+    for _ in 0..subdivisions {
+        m = subdivide(&m);
+    }
+    let indices = m.indices();
+    let n = m.triangles.len();
+    let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+    for run in 0..3 {
+        let t = Instant::now();
+        let p = prepare(&m.positions, &indices).unwrap();
+        let t_prepare = t.elapsed();
+        let mut s = Simplifier::new(&p.mesh, &opts).unwrap();
+        s.run();
+        let (pm, stats) = s.finish();
+        let t_levels = Instant::now();
+        let mut c = pm.cursor();
+        let mut tris = 0;
+        for r in [0.02, 0.1, 0.5] {
+            c.seek(pm.splits_for_triangles((r * n as f64) as usize));
+            tris += c.mesh().triangles.len();
+        }
+        let t_levels = t_levels.elapsed();
+        let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+        println!(
+            "run {run}: {n} tris, total {:.1} ms = prepare {:.1} + setup {:.1} + pairs {:.1} + heap {:.1} + loop {:.1} + log {:.1} + levels {:.1} ({} collapses, {} rejected, {tris} level tris)",
+            ms(t.elapsed()),
+            ms(t_prepare),
+            ms(stats.time.setup),
+            ms(stats.time.pairs),
+            ms(stats.time.heap),
+            ms(stats.time.collapse),
+            ms(stats.time.log),
+            ms(t_levels),
+            stats.collapses,
+            stats.rejected.total(),
+        );
+    }
+}
