@@ -90,16 +90,17 @@ fn main() {
         let t_levels = t_levels.elapsed();
         let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
         println!(
-            "run {run}: {n} tris, total {:.1} ms = prepare {:.1} + setup {:.1} + pairs {:.1} + heap {:.1} + loop {:.1} + log {:.1} + levels {:.1} ({} collapses, {} rejected, {tris} level tris)",
+            "run {run}: {n} tris, total {:.1} ms = prepare {:.1} + setup {:.1} + pairs {:.1} + heap {:.1} + loop {:.1} + log {:.1} + levels {:.1} ({} collapses in {} passes, {} rejected, {tris} level tris)",
             ms(t.elapsed()),
             ms(t_prepare),
             ms(stats.time.setup),
             ms(stats.time.pairs),
             ms(stats.time.heap),
-            ms(stats.time.collapse),
+            ms(stats.time.collapse.saturating_sub(stats.time.heap)),
             ms(stats.time.log),
             ms(t_levels),
             stats.collapses,
+            stats.passes,
             stats.rejected.total(),
         );
     }

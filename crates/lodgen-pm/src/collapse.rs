@@ -9,7 +9,7 @@
 use crate::features::{AttributeCost, Features};
 use crate::heap::QuadHeap;
 use crate::mesh::{Mesh, MeshError};
-use crate::options::{Boundary, Placement, SimplifyOptions};
+use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
 use crate::quadric::Quadric;
 use crate::vsplit::{Contraction, Corner, ProgressiveMesh};
@@ -99,9 +99,11 @@ pub struct PhaseTimes {
     pub setup: Duration,
     /// Edge and τ-pair discovery.
     pub pairs: Duration,
-    /// Initial costs and heap construction.
+    /// Costing and ordering candidates: the initial heap
+    /// ([`Schedule::Greedy`]), or every pass's sorted list
+    /// ([`Schedule::Passes`]).
     pub heap: Duration,
-    /// The contraction loop.
+    /// The contraction loop (without `heap`).
     pub collapse: Duration,
     /// Renumbering the log into the progressive mesh.
     pub log: Duration,
@@ -115,6 +117,8 @@ pub struct Stats {
     pub output_vertices: usize,
     pub output_triangles: usize,
     pub collapses: usize,
+    /// Passes made ([`Schedule::Passes`]; 0 when greedy).
+    pub passes: usize,
     /// Non-edge pairs within τ at the start.
     pub near_pairs: usize,
     pub boundary_vertices: usize,
@@ -201,7 +205,10 @@ pub struct Simplifier {
     alive: Vec<bool>,
     locked: Vec<bool>,
     boundary: Vec<bool>,
+    /// [`Schedule::Greedy`]: every pair, lazily invalidated.
     heap: QuadHeap<Entry>,
+    /// [`Schedule::Passes`]: the pass in progress.
+    pass: Pass,
     live_tris: usize,
     log: Vec<Contraction>,
     stats: Stats,
@@ -217,6 +224,29 @@ pub struct Simplifier {
     features: Option<Features>,
     /// Attribute term of the heap key, when set (`set_attributes`).
     attributes: Option<AttributeCost>,
+}
+
+/// The state of the pass in progress ([`Schedule::Passes`]).
+#[derive(Debug, Default)]
+struct Pass {
+    /// Pass number (starts at 1; 0 = none yet).
+    number: u32,
+    /// Whether `queue` is a started pass (false after a rebuild).
+    open: bool,
+    /// The pass's candidates, sorted; `cursor` is the next one.
+    queue: Vec<Entry>,
+    cursor: usize,
+    /// Vertex → the last pass that moved or removed it.
+    touched: Vec<u32>,
+    /// Triangles this pass should remove (to the target) and has removed.
+    goal: usize,
+    removed: usize,
+    collapses: usize,
+    error_rejections: usize,
+    /// The pass stops at candidates costlier than this (once it has made
+    /// a sixth of its goal, as meshoptimizer does, so that a pass whose
+    /// cheap pairs were all blocked still makes progress).
+    cost_limit: f32,
 }
 
 #[inline]
@@ -352,6 +382,10 @@ impl Simplifier {
             locked,
             boundary,
             heap: QuadHeap::from_vec(Vec::new()),
+            pass: Pass {
+                touched: vec![0; nv],
+                ..Pass::default()
+            },
             live_tris: nt,
             log: Vec::with_capacity(nt / 2),
             stats,
@@ -389,13 +423,15 @@ impl Simplifier {
         stats.time.pairs = t1.elapsed();
 
         let t2 = Instant::now();
-        edges.extend_from_slice(&near);
-        let entries: Vec<Entry> = edges
-            .par_iter()
-            .filter(|&&(a, b)| !(s.locked[a as usize] && s.locked[b as usize]))
-            .map(|&(a, b)| s.entry(a, b))
-            .collect();
-        s.heap = QuadHeap::from_vec(entries);
+        if opts.schedule == Schedule::Greedy {
+            edges.extend_from_slice(&near);
+            let entries: Vec<Entry> = edges
+                .par_iter()
+                .filter(|&&(a, b)| !(s.locked[a as usize] && s.locked[b as usize]))
+                .map(|&(a, b)| s.entry(a, b))
+                .collect();
+            s.heap = QuadHeap::from_vec(entries);
+        }
         stats.time.heap = t2.elapsed();
         s.stats = stats;
         Ok(s)
@@ -574,6 +610,13 @@ impl Simplifier {
 
     /// Re-cost every queued pair (after the costs' inputs changed).
     fn rebuild_heap(&mut self) {
+        if self.opts.schedule != Schedule::Greedy {
+            // the next step starts a fresh pass
+            self.pass.queue.clear();
+            self.pass.cursor = 0;
+            self.pass.open = false;
+            return;
+        }
         let mut pairs: Vec<(u32, u32)> = self.heap.drain().map(|e| (e.a, e.b)).collect();
         pairs.retain(|&(a, b)| self.alive[a as usize] && self.alive[b as usize]);
         pairs.sort_unstable();
@@ -632,6 +675,13 @@ impl Simplifier {
         if self.live_tris <= self.target {
             return Err(StopReason::Target);
         }
+        match self.opts.schedule {
+            Schedule::Greedy => self.step_greedy(),
+            Schedule::Passes { factor } => self.step_pass(factor),
+        }
+    }
+
+    fn step_greedy(&mut self) -> Result<(), StopReason> {
         while let Some(e) = self.heap.pop() {
             let (a, b) = (e.a as usize, e.b as usize);
             if !self.alive[a]
@@ -641,32 +691,8 @@ impl Simplifier {
             {
                 continue;
             }
-            let (p, cost) = self.target_of(e.a, e.b);
-            let q = self.quadric[a] + self.quadric[b];
-            let error = if q.weight > 0.0 {
-                (cost / q.weight).sqrt()
-            } else {
-                cost.sqrt()
-            };
-            if self.opts.max_error.is_some_and(|m| error > m) {
-                self.stats.rejected.count(Rejected::Error);
-                continue;
-            }
-            // v1 (kept) is the endpoint the new vertex is closer to.
-            let (v0, v1) = if self.locked[a]
-                || (!self.locked[b]
-                    && (p - dv(self.pos[a])).length_squared()
-                        <= (p - dv(self.pos[b])).length_squared())
-            {
-                (e.b, e.a)
-            } else {
-                (e.a, e.b)
-            };
-            match self.check(v0, v1, p) {
-                Ok(shared) => {
-                    self.contract(v0, v1, p, error as f32, shared);
-                    return Ok(());
-                }
+            match self.try_contract(e.a, e.b) {
+                Ok(()) => return Ok(()),
                 Err(r) => self.stats.rejected.count(r),
             }
         }
@@ -675,6 +701,139 @@ impl Simplifier {
         } else {
             StopReason::Exhausted
         })
+    }
+
+    fn step_pass(&mut self, factor: f32) -> Result<(), StopReason> {
+        loop {
+            let pass = &mut self.pass;
+            if pass.cursor >= pass.queue.len() {
+                if pass.open && pass.collapses == 0 {
+                    // nothing changed: the next pass would be the same
+                    return Err(if pass.error_rejections > 0 {
+                        StopReason::MaxError
+                    } else {
+                        StopReason::Exhausted
+                    });
+                }
+                self.start_pass(factor);
+                if self.pass.queue.is_empty() {
+                    return Err(StopReason::Exhausted);
+                }
+                continue;
+            }
+            let e = pass.queue[pass.cursor];
+            if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
+                pass.cursor = pass.queue.len();
+                continue;
+            }
+            pass.cursor += 1;
+            let n = pass.number;
+            if pass.touched[e.a as usize] == n || pass.touched[e.b as usize] == n {
+                continue;
+            }
+            let before = self.live_tris;
+            match self.try_contract(e.a, e.b) {
+                Ok(()) => {
+                    let pass = &mut self.pass;
+                    pass.touched[e.a as usize] = n;
+                    pass.touched[e.b as usize] = n;
+                    pass.removed += before - self.live_tris;
+                    pass.collapses += 1;
+                    return Ok(());
+                }
+                Err(r) => {
+                    if r == Rejected::Error {
+                        self.pass.error_rejections += 1;
+                    }
+                    self.stats.rejected.count(r);
+                }
+            }
+        }
+    }
+
+    /// Cost every live pair (edges and τ partners, both vertices not
+    /// locked), sort, and set the pass's goal and cost limit.
+    fn start_pass(&mut self, factor: f32) {
+        let t0 = Instant::now();
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(self.live_tris * 3 / 2 + 16);
+        for v in 0..self.pos.len() as u32 {
+            let vi = v as usize;
+            if !self.alive[vi] {
+                continue;
+            }
+            let g = self.next_generation();
+            let alive = &self.tri_alive;
+            self.vtris[vi].retain(|&t| alive[t as usize]);
+            for &t in &self.vtris[vi] {
+                for &x in &self.tris[t as usize] {
+                    if x > v && self.mark[x as usize] != g {
+                        self.mark[x as usize] = g;
+                        if !(self.locked[vi] && self.locked[x as usize]) {
+                            pairs.push((v, x));
+                        }
+                    }
+                }
+            }
+            for &x in &self.partners[vi] {
+                if x > v && self.alive[x as usize] && self.mark[x as usize] != g {
+                    self.mark[x as usize] = g;
+                    if !(self.locked[vi] && self.locked[x as usize]) {
+                        pairs.push((v, x));
+                    }
+                }
+            }
+        }
+        let mut queue: Vec<Entry> = std::mem::take(&mut self.pass.queue);
+        queue.clear();
+        queue.par_extend(pairs.par_iter().map(|&(a, b)| self.entry(a, b)));
+        drop(pairs);
+        queue.par_sort_unstable();
+        let goal = self.live_tris.saturating_sub(self.target);
+        // most contractions remove two triangles
+        let limit = queue
+            .get(goal / 2)
+            .map_or(f32::INFINITY, |e| e.cost * factor);
+        let pass = &mut self.pass;
+        pass.number += 1;
+        pass.open = true;
+        pass.queue = queue;
+        pass.cursor = 0;
+        pass.goal = goal;
+        pass.removed = 0;
+        pass.collapses = 0;
+        pass.error_rejections = 0;
+        pass.cost_limit = limit;
+        self.stats.passes += 1;
+        self.stats.time.heap += t0.elapsed();
+    }
+
+    /// Re-cost the pair `(a, b)` (exact: its vertices are current) and
+    /// contract it if it is within `max_error` and legal.
+    fn try_contract(&mut self, a: u32, b: u32) -> Result<(), Rejected> {
+        let (p, cost) = self.target_of(a, b);
+        let (ai, bi) = (a as usize, b as usize);
+        let q = self.quadric[ai] + self.quadric[bi];
+        let error = if q.weight > 0.0 {
+            (cost / q.weight).sqrt()
+        } else {
+            cost.sqrt()
+        };
+        if self.opts.max_error.is_some_and(|m| error > m) {
+            return Err(Rejected::Error);
+        }
+        // v1 (kept) is the endpoint the new vertex is closer to.
+        let (v0, v1) = if self.locked[ai]
+            || (!self.locked[bi]
+                && (p - dv(self.pos[ai])).length_squared()
+                    <= (p - dv(self.pos[bi])).length_squared())
+        {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        let shared = self.check(v0, v1, p)?;
+        self.contract(v0, v1, p, error as f32, shared);
+        Ok(())
     }
 
     /// Run until a stop; returns the reason.
@@ -842,6 +1001,9 @@ impl Simplifier {
         }
         self.log.push(record);
         self.stats.collapses += 1;
+        if self.opts.schedule != Schedule::Greedy {
+            return;
+        }
 
         // Re-queue every pair of v1: its edge neighbours and τ partners.
         let g = self.next_generation();

@@ -43,7 +43,10 @@ pub use curvature::{
 };
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
-pub use options::{Boundary, Placement, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
+pub use options::{
+    Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
+    DEFAULT_PASS_FACTOR,
+};
 pub use vsplit::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 
 /// A simplification's result: the progressive mesh (numbered as in

@@ -27,6 +27,27 @@ pub enum Placement {
     HalfEdge,
 }
 
+/// In which order contractions are made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Schedule {
+    /// GH97 literally: one heap of all pairs, always the cheapest next; the
+    /// pairs around the survivor are re-costed after every contraction.
+    Greedy,
+    /// Passes (as meshoptimizer does): cost every pair once, sort, then
+    /// contract in that order every pair whose vertices have not moved yet
+    /// in this pass, up to `factor ×` the cost of the pass's goal-th pair;
+    /// then start a new pass. Costs read in a pass are exact (a pair is
+    /// skipped once either vertex moved), only the re-ranking waits for the
+    /// next pass. Several times faster than `Greedy` and measured as good
+    /// (README, "Performance").
+    Passes { factor: f32 },
+}
+
+/// Default error slack of [`Schedule::Passes`]: a pass stops at 1.5× the
+/// cost of its goal-th cheapest pair (meshoptimizer's figure; the bench
+/// measured 1.25 and 2 no better).
+pub const DEFAULT_PASS_FACTOR: f32 = 1.5;
+
 /// The pair-distance threshold τ of GH97 (non-edge pairs closer than τ may
 /// contract too).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +80,8 @@ pub struct SimplifyOptions {
     pub boundary: Boundary,
     /// Default value: `Optimal`.
     pub placement: Placement,
+    /// Default value: `Passes { factor: DEFAULT_PASS_FACTOR }`.
+    pub schedule: Schedule,
 }
 
 impl SimplifyOptions {
@@ -70,6 +93,9 @@ impl SimplifyOptions {
         area_weighted: true,
         boundary: Boundary::Weighted(DEFAULT_BOUNDARY_WEIGHT),
         placement: Placement::Optimal,
+        schedule: Schedule::Passes {
+            factor: DEFAULT_PASS_FACTOR,
+        },
     };
     pub fn with_target_triangles(mut self, n: usize) -> Self {
         self.target_triangles = Some(n);
@@ -97,6 +123,10 @@ impl SimplifyOptions {
     }
     pub fn with_placement(mut self, p: Placement) -> Self {
         self.placement = p;
+        self
+    }
+    pub fn with_schedule(mut self, s: Schedule) -> Self {
+        self.schedule = s;
         self
     }
 

@@ -7,7 +7,9 @@
 use lodgen_pm::collapse::FLIP_MIN_COS;
 use lodgen_pm::pairs::{edges, near_pairs, near_pairs_brute_force};
 use lodgen_pm::shapes::{grid, icosphere, torus};
-use lodgen_pm::{prepare, simplify, Mesh, ProgressiveMesh, Simplifier, SimplifyOptions, Tau};
+use lodgen_pm::{
+    prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, Tau,
+};
 use proptest::prelude::*;
 
 mod common;
@@ -119,22 +121,35 @@ fn random_mesh(kind: u8, seed: u64) -> Mesh {
     }
 }
 
+/// Both contraction orders must keep every invariant.
+fn schedule(greedy: bool) -> Schedule {
+    if greedy {
+        Schedule::Greedy
+    } else {
+        SimplifyOptions::DEFAULT.schedule
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
     #[test]
-    fn random_meshes_simplify_cleanly(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.9) {
+    fn random_meshes_simplify_cleanly(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.9, greedy in any::<bool>()) {
         let m = random_mesh(kind, seed);
         let welded = prepare(&m.positions, &m.indices()).unwrap();
-        let out = simplify(&m.positions, &m.indices(), &SimplifyOptions::DEFAULT.with_target_ratio(ratio)).unwrap();
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio).with_schedule(schedule(greedy));
+        let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
         check_levels(&out.pm, true);
         prop_assert_eq!(out.pm.full_in_input_order(), welded.mesh);
     }
 
     #[test]
-    fn mesh_at_matches_snapshots(kind in 0u8..3, seed in any::<u64>(), tau in 0.0f64..0.3) {
+    fn mesh_at_matches_snapshots(kind in 0u8..3, seed in any::<u64>(), tau in 0.0f64..0.3, greedy in any::<bool>()) {
         let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
-        let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.1).with_tau(Tau::Absolute(tau));
+        let opts = SimplifyOptions::DEFAULT
+            .with_target_ratio(0.1)
+            .with_tau(Tau::Absolute(tau))
+            .with_schedule(schedule(greedy));
         let mut s = Simplifier::new(&m, &opts).unwrap();
         let mut snaps = vec![s.snapshot()];
         while s.step().is_ok() {

@@ -3,8 +3,12 @@
 
 use lodgen_pm::shapes::{cube, grid, icosphere, tetrahedron, torus};
 use lodgen_pm::{
-    prepare, simplify, Boundary, Mesh, Placement, Simplifier, SimplifyOptions, StopReason, Tau,
+    prepare, simplify, Boundary, Mesh, Placement, Schedule, Simplifier, SimplifyOptions,
+    StopReason, Tau,
 };
+
+/// Both contraction orders: every hand-built expectation holds for each.
+const SCHEDULES: [Schedule; 2] = [SimplifyOptions::DEFAULT.schedule, Schedule::Greedy];
 
 fn run(mesh: &Mesh, opts: SimplifyOptions) -> lodgen_pm::Simplified {
     simplify(&mesh.positions, &mesh.indices(), &opts).expect("valid mesh")
@@ -46,118 +50,143 @@ fn components(m: &Mesh) -> usize {
 
 #[test]
 fn tetrahedron_does_not_go_below_four_faces() {
-    let out = run(
-        &tetrahedron(),
-        SimplifyOptions::DEFAULT.with_target_triangles(0),
-    );
-    assert_eq!(out.pm.base.triangles.len(), 4);
-    assert_eq!(out.stop, StopReason::Exhausted);
-    assert!(out.stats.rejected.total() > 0);
+    for schedule in SCHEDULES {
+        let out = run(
+            &tetrahedron(),
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(0),
+        );
+        assert_eq!(out.pm.base.triangles.len(), 4);
+        assert_eq!(out.stop, StopReason::Exhausted);
+        assert!(out.stats.rejected.total() > 0);
+    }
 }
 
 #[test]
 fn octahedron_like_sphere_does_not_become_a_sheet() {
-    let out = run(
-        &icosphere(1),
-        SimplifyOptions::DEFAULT.with_target_triangles(0),
-    );
-    let base = &out.pm.base;
-    assert!(base.triangles.len() >= 4, "{} faces", base.triangles.len());
-    // closed: every edge used exactly twice, in opposite directions
-    let mut e: Vec<(u32, u32)> = base
-        .triangles
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .collect();
-    e.sort_unstable();
-    for w in e.windows(2) {
-        assert_ne!(w[0], w[1], "a directed edge is used twice: {:?}", w[0]);
-    }
-    for &(a, b) in &e {
-        assert!(
-            e.binary_search(&(b, a)).is_ok(),
-            "edge ({a},{b}) has no twin"
+    for schedule in SCHEDULES {
+        let out = run(
+            &icosphere(1),
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(0),
         );
+        let base = &out.pm.base;
+        assert!(base.triangles.len() >= 4, "{} faces", base.triangles.len());
+        // closed: every edge used exactly twice, in opposite directions
+        let mut e: Vec<(u32, u32)> = base
+            .triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .collect();
+        e.sort_unstable();
+        for w in e.windows(2) {
+            assert_ne!(w[0], w[1], "a directed edge is used twice: {:?}", w[0]);
+        }
+        for &(a, b) in &e {
+            assert!(
+                e.binary_search(&(b, a)).is_ok(),
+                "edge ({a},{b}) has no twin"
+            );
+        }
     }
 }
 
 #[test]
 fn flat_grid_collapses_to_two_triangles_with_zero_error() {
-    let g = grid(8, 8, |_, _| 0.0);
-    let out = run(&g, SimplifyOptions::DEFAULT.with_target_triangles(2));
-    assert_eq!(out.pm.base.triangles.len(), 2);
-    assert_eq!(out.stop, StopReason::Target);
-    assert!(out.pm.splits.iter().all(|s| s.error == 0.0));
-    let mut corners = out.pm.base.positions.clone();
-    corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    assert_eq!(
-        corners,
-        vec![
-            [0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0]
-        ]
-    );
+    for schedule in SCHEDULES {
+        let g = grid(8, 8, |_, _| 0.0);
+        let out = run(
+            &g,
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(2),
+        );
+        assert_eq!(out.pm.base.triangles.len(), 2);
+        assert_eq!(out.stop, StopReason::Target);
+        assert!(out.pm.splits.iter().all(|s| s.error == 0.0));
+        let mut corners = out.pm.base.positions.clone();
+        corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(
+            corners,
+            vec![
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0]
+            ]
+        );
+    }
 }
 
 #[test]
 fn cube_keeps_its_eight_corners() {
-    let c = cube([0.0; 3], [1.0; 3], 4);
-    assert_eq!(c.triangles.len(), 6 * 32);
-    let out = run(&c, SimplifyOptions::DEFAULT.with_target_triangles(12));
-    let base = &out.pm.base;
-    assert_eq!(base.triangles.len(), 12);
-    assert_eq!(base.positions.len(), 8);
-    for p in &base.positions {
-        for &x in p {
-            assert!(x == 0.0 || x == 1.0, "corner moved: {p:?}");
+    for schedule in SCHEDULES {
+        let c = cube([0.0; 3], [1.0; 3], 4);
+        assert_eq!(c.triangles.len(), 6 * 32);
+        let out = run(
+            &c,
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(12),
+        );
+        let base = &out.pm.base;
+        assert_eq!(base.triangles.len(), 12);
+        assert_eq!(base.positions.len(), 8);
+        for p in &base.positions {
+            for &x in p {
+                assert!(x == 0.0 || x == 1.0, "corner moved: {p:?}");
+            }
         }
     }
 }
 
 #[test]
 fn square_with_a_border_keeps_the_border_in_place() {
-    // bumpy interior, flat straight border
-    let g = grid(16, 16, |x, y| {
-        let inner = x > 0.0 && x < 1.0 && y > 0.0 && y < 1.0;
-        if inner {
-            0.05 * ((x * 17.0).sin() * (y * 13.0).cos())
-        } else {
-            0.0
-        }
-    });
-    for boundary in [Boundary::Weighted(10.0), Boundary::Locked] {
-        let out = run(
-            &g,
-            SimplifyOptions::DEFAULT
-                .with_target_ratio(0.2)
-                .with_boundary(boundary),
-        );
-        let base = &out.pm.base;
-        // every border edge of the result lies on the original border
-        let mut e: Vec<(u32, u32)> = base
-            .triangles
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .map(|(a, b)| (a.min(b), a.max(b)))
-            .collect();
-        e.sort_unstable();
-        let mut border = Vec::new();
-        for run in e.chunk_by(|a, b| a == b) {
-            if run.len() == 1 {
-                border.push(run[0]);
+    for schedule in SCHEDULES {
+        // bumpy interior, flat straight border
+        let g = grid(16, 16, |x, y| {
+            let inner = x > 0.0 && x < 1.0 && y > 0.0 && y < 1.0;
+            if inner {
+                0.05 * ((x * 17.0).sin() * (y * 13.0).cos())
+            } else {
+                0.0
             }
-        }
-        assert!(border.len() >= 4);
-        for (a, b) in border {
-            for v in [a, b] {
-                let p = base.positions[v as usize];
-                let on = p[0] == 0.0 || p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0;
-                assert!(
-                    on && p[2] == 0.0,
-                    "{boundary:?}: border vertex off the border: {p:?}"
-                );
+        });
+        for boundary in [Boundary::Weighted(10.0), Boundary::Locked] {
+            let out = run(
+                &g,
+                SimplifyOptions::DEFAULT
+                    .with_schedule(schedule)
+                    .with_target_ratio(0.2)
+                    .with_boundary(boundary),
+            );
+            let base = &out.pm.base;
+            // every border edge of the result lies on the original border
+            let mut e: Vec<(u32, u32)> = base
+                .triangles
+                .iter()
+                .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+                .map(|(a, b)| (a.min(b), a.max(b)))
+                .collect();
+            e.sort_unstable();
+            let mut border = Vec::new();
+            for run in e.chunk_by(|a, b| a == b) {
+                if run.len() == 1 {
+                    border.push(run[0]);
+                }
+            }
+            assert!(border.len() >= 4);
+            for (a, b) in border {
+                for v in [a, b] {
+                    let p = base.positions[v as usize];
+                    let on = p[0] == 0.0 || p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0;
+                    assert!(
+                        on && p[2] == 0.0,
+                        "{boundary:?}: border vertex off the border: {p:?}"
+                    );
+                }
             }
         }
     }
@@ -179,25 +208,29 @@ fn two_boxes(gap: f32) -> Mesh {
 
 #[test]
 fn two_boxes_merge_only_when_tau_reaches_their_gap() {
-    let m = two_boxes(0.01);
-    assert_eq!(components(&m), 2);
-    for (tau, expect) in [(0.0, 2), (0.009, 2), (0.01, 1), (0.02, 1)] {
+    for schedule in SCHEDULES {
+        let m = two_boxes(0.01);
+        assert_eq!(components(&m), 2);
+        for (tau, expect) in [(0.0, 2), (0.009, 2), (0.01, 1), (0.02, 1)] {
+            let out = run(
+                &m,
+                SimplifyOptions::DEFAULT
+                    .with_schedule(schedule)
+                    .with_target_triangles(20)
+                    .with_tau(Tau::Absolute(tau)),
+            );
+            assert_eq!(components(&out.pm.base), expect, "tau = {tau}");
+        }
+        // as a fraction of the diagonal (≈ 2.46): 0.5 % ≈ 0.0123 ≥ 0.01
         let out = run(
             &m,
             SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
                 .with_target_triangles(20)
-                .with_tau(Tau::Absolute(tau)),
+                .with_tau(Tau::DiagonalFraction(0.005)),
         );
-        assert_eq!(components(&out.pm.base), expect, "tau = {tau}");
+        assert_eq!(components(&out.pm.base), 1);
     }
-    // as a fraction of the diagonal (≈ 2.46): 0.5 % ≈ 0.0123 ≥ 0.01
-    let out = run(
-        &m,
-        SimplifyOptions::DEFAULT
-            .with_target_triangles(20)
-            .with_tau(Tau::DiagonalFraction(0.005)),
-    );
-    assert_eq!(components(&out.pm.base), 1);
 }
 
 #[test]
@@ -216,63 +249,74 @@ fn half_edge_placement_only_uses_input_positions() {
 
 #[test]
 fn replay_returns_the_input_index_for_index() {
-    let m = torus(1.0, 0.3, 32, 16);
-    let out = run(&m, SimplifyOptions::DEFAULT.with_target_triangles(40));
-    assert_eq!(out.pm.base.triangles.len(), 40);
-    let welded = prepare(&m.positions, &m.indices()).unwrap();
-    assert_eq!(out.pm.full_in_input_order(), welded.mesh);
-    // and through the weld map, the caller's own numbering
-    let full = out.pm.full_in_input_order();
-    for (i, p) in m.positions.iter().enumerate() {
-        assert_eq!(full.positions[out.vertex_map[i] as usize], *p);
-    }
-    for (i, t) in m.triangles.iter().enumerate() {
-        let w = full.triangles[i];
-        assert_eq!(out.triangle_map[i] as usize, i);
-        assert_eq!(w, t.map(|v| out.vertex_map[v as usize]));
+    for schedule in SCHEDULES {
+        let m = torus(1.0, 0.3, 32, 16);
+        let out = run(
+            &m,
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(40),
+        );
+        assert_eq!(out.pm.base.triangles.len(), 40);
+        let welded = prepare(&m.positions, &m.indices()).unwrap();
+        assert_eq!(out.pm.full_in_input_order(), welded.mesh);
+        // and through the weld map, the caller's own numbering
+        let full = out.pm.full_in_input_order();
+        for (i, p) in m.positions.iter().enumerate() {
+            assert_eq!(full.positions[out.vertex_map[i] as usize], *p);
+        }
+        for (i, t) in m.triangles.iter().enumerate() {
+            let w = full.triangles[i];
+            assert_eq!(out.triangle_map[i] as usize, i);
+            assert_eq!(w, t.map(|v| out.vertex_map[v as usize]));
+        }
     }
 }
 
 #[test]
 fn mesh_at_equals_the_snapshot_taken_during_simplification() {
-    let m = icosphere(3);
-    let opts = SimplifyOptions::DEFAULT.with_target_triangles(30);
-    let mut s = Simplifier::new(&m, &opts).unwrap();
-    let mut snaps = vec![s.snapshot()];
-    while s.step().is_ok() {
-        snaps.push(s.snapshot());
-    }
-    let (pm, stats) = s.finish();
-    assert_eq!(stats.collapses, pm.len());
-    assert_eq!(snaps.len(), pm.len() + 1);
-    let mut cursor = pm.cursor();
-    for k in 0..=pm.len() {
-        // snapshot after c contractions = mesh after len - c splits
-        let snap = &snaps[pm.len() - k];
-        let mesh = cursor.mesh();
-        assert_eq!(mesh.triangles.len(), snap.triangles.len());
-        let mut mapped: Vec<(u32, [u32; 3])> = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                (
-                    pm.triangle_origin[i],
-                    t.map(|v| pm.vertex_origin[v as usize]),
-                )
-            })
-            .collect();
-        mapped.sort_unstable();
-        assert_eq!(&mapped, &snap.triangles, "at {k} splits");
-        for (i, p) in mesh.positions.iter().enumerate() {
-            assert_eq!(*p, snap.positions[pm.vertex_origin[i] as usize]);
+    for schedule in SCHEDULES {
+        let m = icosphere(3);
+        let opts = SimplifyOptions::DEFAULT
+            .with_schedule(schedule)
+            .with_target_triangles(30);
+        let mut s = Simplifier::new(&m, &opts).unwrap();
+        let mut snaps = vec![s.snapshot()];
+        while s.step().is_ok() {
+            snaps.push(s.snapshot());
         }
-        assert_eq!(*mesh, pm.mesh_at_splits(k));
-        cursor.refine(1);
+        let (pm, stats) = s.finish();
+        assert_eq!(stats.collapses, pm.len());
+        assert_eq!(snaps.len(), pm.len() + 1);
+        let mut cursor = pm.cursor();
+        for k in 0..=pm.len() {
+            // snapshot after c contractions = mesh after len - c splits
+            let snap = &snaps[pm.len() - k];
+            let mesh = cursor.mesh();
+            assert_eq!(mesh.triangles.len(), snap.triangles.len());
+            let mut mapped: Vec<(u32, [u32; 3])> = mesh
+                .triangles
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    (
+                        pm.triangle_origin[i],
+                        t.map(|v| pm.vertex_origin[v as usize]),
+                    )
+                })
+                .collect();
+            mapped.sort_unstable();
+            assert_eq!(&mapped, &snap.triangles, "at {k} splits");
+            for (i, p) in mesh.positions.iter().enumerate() {
+                assert_eq!(*p, snap.positions[pm.vertex_origin[i] as usize]);
+            }
+            assert_eq!(*mesh, pm.mesh_at_splits(k));
+            cursor.refine(1);
+        }
+        // and back down again
+        cursor.coarsen(usize::MAX);
+        assert_eq!(*cursor.mesh(), pm.base);
     }
-    // and back down again
-    cursor.coarsen(usize::MAX);
-    assert_eq!(*cursor.mesh(), pm.base);
 }
 
 #[test]
@@ -286,38 +330,52 @@ fn target_triangles_and_ratio_are_honoured() {
 
 #[test]
 fn max_error_stops_before_exceeding_the_bound() {
-    let m = icosphere(4);
-    let bound = 0.01;
-    let out = run(&m, SimplifyOptions::DEFAULT.with_max_error(bound));
-    assert_eq!(out.stop, StopReason::MaxError);
-    assert!(out.pm.splits.iter().all(|s| f64::from(s.error) <= bound));
-    assert!(out.pm.base.triangles.len() < m.triangles.len());
-    assert!(out.pm.base.triangles.len() > 20);
+    for schedule in SCHEDULES {
+        let m = icosphere(4);
+        let bound = 0.01;
+        let out = run(
+            &m,
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_max_error(bound),
+        );
+        assert_eq!(out.stop, StopReason::MaxError);
+        assert!(out.pm.splits.iter().all(|s| f64::from(s.error) <= bound));
+        assert!(out.pm.base.triangles.len() < m.triangles.len());
+        assert!(out.pm.base.triangles.len() > 20);
+    }
 }
 
 #[test]
 fn non_manifold_input_does_not_crash() {
-    // three triangles on one edge (a fin), plus two fans pinched at a vertex
-    let mut m = grid(4, 4, |_, _| 0.0);
-    let n = m.positions.len() as u32;
-    m.positions.push([0.5, 0.5, 1.0]);
-    m.triangles.push([6, 7, n]); // third triangle on edge (6,7)
-    let g2 = grid(2, 2, |x, y| 1.0 + x + y);
-    let off = m.positions.len() as u32;
-    m.positions.extend(
-        g2.positions
-            .iter()
-            .map(|p| [p[0] + 1.0, p[1] + 1.0, p[2] - 1.0]),
-    );
-    m.triangles
-        .extend(g2.triangles.iter().map(|t| t.map(|v| v + off)));
-    let out = run(&m, SimplifyOptions::DEFAULT.with_target_triangles(0));
-    assert!(out.stats.locked_vertices >= 2);
-    assert!(!out.pm.base.triangles.is_empty());
-    assert_eq!(
-        out.pm.full_in_input_order().triangles.len(),
-        m.triangles.len()
-    );
+    for schedule in SCHEDULES {
+        // three triangles on one edge (a fin), plus two fans pinched at a vertex
+        let mut m = grid(4, 4, |_, _| 0.0);
+        let n = m.positions.len() as u32;
+        m.positions.push([0.5, 0.5, 1.0]);
+        m.triangles.push([6, 7, n]); // third triangle on edge (6,7)
+        let g2 = grid(2, 2, |x, y| 1.0 + x + y);
+        let off = m.positions.len() as u32;
+        m.positions.extend(
+            g2.positions
+                .iter()
+                .map(|p| [p[0] + 1.0, p[1] + 1.0, p[2] - 1.0]),
+        );
+        m.triangles
+            .extend(g2.triangles.iter().map(|t| t.map(|v| v + off)));
+        let out = run(
+            &m,
+            SimplifyOptions::DEFAULT
+                .with_schedule(schedule)
+                .with_target_triangles(0),
+        );
+        assert!(out.stats.locked_vertices >= 2);
+        assert!(!out.pm.base.triangles.is_empty());
+        assert_eq!(
+            out.pm.full_in_input_order().triangles.len(),
+            m.triangles.len()
+        );
+    }
 }
 
 #[test]
