@@ -6,13 +6,14 @@
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
 //! form in `vsplit`.
 
+use crate::adjacency::{FanLookup, Fans};
 use crate::features::{AttributeCost, Features};
-use crate::heap::QuadHeap;
+use crate::heap::{f32_order_key, radix_sort_by_key, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
 use crate::quadric::Quadric;
-use crate::vsplit::{Contraction, Corner, ProgressiveMesh};
+use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh};
 use glam::DVec3;
 use rayon::prelude::*;
 use smallvec::SmallVec;
@@ -198,7 +199,7 @@ pub struct Simplifier {
     tris: Vec<[u32; 3]>,
     tri_alive: Vec<bool>,
     /// Vertex → incident triangles; may hold dead triangles (skipped).
-    vtris: Vec<Vec<u32>>,
+    vtris: Fans,
     /// Vertex → non-edge τ partners.
     partners: Vec<Vec<u32>>,
     version: Vec<u16>,
@@ -210,12 +211,13 @@ pub struct Simplifier {
     /// [`Schedule::Passes`]: the pass in progress.
     pass: Pass,
     live_tris: usize,
-    log: Vec<Contraction>,
+    log: Log,
     stats: Stats,
     /// Scratch: per-vertex marks with a generation counter.
     mark: Vec<u32>,
     generation: u32,
     scratch: Vec<u32>,
+    fan_scratch: Vec<u32>,
     /// Optional per-vertex multiplier of pair costs (curvature-weighted
     /// modes): a pair costs `cost × max(scale[a], scale[b])`.
     cost_scale: Option<Vec<f32>>,
@@ -235,6 +237,8 @@ struct Pass {
     open: bool,
     /// The pass's candidates, sorted; `cursor` is the next one.
     queue: Vec<Entry>,
+    /// The radix sort's buffer.
+    scratch: Vec<Entry>,
     cursor: usize,
     /// Vertex → the last pass that moved or removed it.
     touched: Vec<u32>,
@@ -275,98 +279,45 @@ impl Simplifier {
             input_triangles: nt,
             ..Stats::default()
         };
-        // Vertex → triangles, filled from counts so each Vec is allocated once.
-        let mut degree = vec![0u32; nv];
-        for t in &mesh.triangles {
-            for &v in t {
-                degree[v as usize] += 1;
-            }
-        }
-        let mut vtris: Vec<Vec<u32>> = degree
-            .iter()
-            .map(|&d| Vec::with_capacity(d as usize))
-            .collect();
-        for (i, t) in mesh.triangles.iter().enumerate() {
-            for &v in t {
-                vtris[v as usize].push(i as u32);
-            }
-        }
+        let vtris = Fans::new(nv, &mesh.triangles, |_| true);
 
-        // Directed edges sorted by undirected key: classify each edge.
-        let mut half: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * nt);
-        for (i, t) in mesh.triangles.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                half.push((a.min(b), a.max(b), (i as u32) << 1 | u32::from(a > b)));
-            }
-        }
-        half.par_sort_unstable();
-        let mut locked = vec![false; nv];
-        let mut boundary = vec![false; nv];
-        let mut quadric = vec![Quadric::default(); nv];
-        let mut edges = Vec::with_capacity(half.len() / 2 + 1);
+        // Classify every vertex from its own fan (in parallel): border
+        // and non-manifold edges, fans, and its quadric.
         let boundary_weight = match opts.boundary {
             Boundary::Weighted(w) => w,
             Boundary::Locked => 0.0,
         };
-        for run in half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
-            let (a, b) = (run[0].0, run[0].1);
-            edges.push((a, b));
-            match run.len() {
-                1 => {
-                    boundary[a as usize] = true;
-                    boundary[b as usize] = true;
-                    if boundary_weight > 0.0 {
-                        let t = mesh.triangles[(run[0].2 >> 1) as usize];
-                        let (pa, pb) = (
-                            dv(mesh.positions[a as usize]),
-                            dv(mesh.positions[b as usize]),
+        let infos: Vec<VertexInfo> = (0..nv as u32)
+            .into_par_iter()
+            .map(|v| classify_vertex(mesh, vtris.fan(v), v, opts, boundary_weight))
+            .collect();
+        let quadric: Vec<Quadric> = infos.par_iter().map(|i| i.quadric).collect();
+        let boundary: Vec<bool> = infos.iter().map(|i| i.boundary).collect();
+        let locked: Vec<bool> = infos.iter().map(|i| i.locked).collect();
+        drop(infos);
+        let tau = opts.tau_for(mesh.diagonal());
+        // Sorted edges (only the greedy heap and τ pairs need the list).
+        let mut edges: Vec<(u32, u32)> = if opts.schedule == Schedule::Greedy || tau > 0.0 {
+            (0..nv as u32)
+                .into_par_iter()
+                .flat_map_iter(|v| {
+                    let mut nb: SmallVec<[u32; 32]> = SmallVec::new();
+                    for &t in vtris.fan(v) {
+                        nb.extend(
+                            mesh.triangles[t as usize]
+                                .iter()
+                                .copied()
+                                .filter(|&x| x > v),
                         );
-                        let n = face_normal(&mesh.positions, &t);
-                        let e = pb - pa;
-                        let c = e.cross(n);
-                        let len = c.length();
-                        if len > 0.0 {
-                            let c = c / len;
-                            let w = boundary_weight
-                                * if opts.area_weighted {
-                                    e.length_squared()
-                                } else {
-                                    1.0
-                                };
-                            let q = Quadric::from_plane(c, -c.dot(pa), w);
-                            // constraint planes shape the cost, not the
-                            // mean-distance normalisation
-                            let q = Quadric { weight: 0.0, ..q };
-                            quadric[a as usize] += q;
-                            quadric[b as usize] += q;
-                        }
                     }
-                }
-                // an interior edge must be used once in each direction
-                2 if (run[0].2 & 1) != (run[1].2 & 1) => {}
-                _ => {
-                    locked[a as usize] = true;
-                    locked[b as usize] = true;
-                }
-            }
-        }
-        drop(half);
-
-        // Face quadrics.
-        for t in &mesh.triangles {
-            let [p0, p1, p2] = t.map(|v| dv(mesh.positions[v as usize]));
-            let n = (p1 - p0).cross(p2 - p0);
-            let len = n.length();
-            if len > 0.0 {
-                let unit = n / len;
-                let w = if opts.area_weighted { 0.5 * len } else { 1.0 };
-                let q = Quadric::from_plane(unit, -unit.dot(p0), w);
-                for &v in t {
-                    quadric[v as usize] += q;
-                }
-            }
-        }
+                    nb.sort_unstable();
+                    nb.dedup();
+                    nb.into_iter().map(move |x| (v, x))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
 
         let mut s = Simplifier {
             opts: *opts,
@@ -387,21 +338,16 @@ impl Simplifier {
                 ..Pass::default()
             },
             live_tris: nt,
-            log: Vec::with_capacity(nt / 2),
+            log: Log::with_capacity(nt / 2),
             stats,
             mark: vec![0; nv],
             generation: 0,
             scratch: Vec::new(),
+            fan_scratch: Vec::new(),
             cost_scale: None,
             features: None,
             attributes: None,
         };
-        // Non-manifold vertices (several fans meeting at one vertex).
-        for v in 0..nv as u32 {
-            if !s.locked[v as usize] && fan_count(&s.tris, v, &s.vtris[v as usize]) > 1 {
-                s.locked[v as usize] = true;
-            }
-        }
         if opts.boundary == Boundary::Locked {
             for v in 0..nv {
                 s.locked[v] |= s.boundary[v];
@@ -413,7 +359,6 @@ impl Simplifier {
         stats.time.setup = t0.elapsed();
 
         let t1 = Instant::now();
-        let tau = opts.tau_for(mesh.diagonal());
         let near = pairs::near_pairs(&mesh.positions, &edges, tau);
         stats.near_pairs = near.len();
         for &(a, b) in &near {
@@ -577,7 +522,9 @@ impl Simplifier {
             if a as usize >= nv || b as usize >= nv {
                 continue;
             }
-            let faces: SmallVec<[u32; 2]> = self.vtris[a as usize]
+            let faces: SmallVec<[u32; 2]> = self
+                .vtris
+                .fan(a)
                 .iter()
                 .copied()
                 .filter(|&t| self.tri_alive[t as usize] && self.tris[t as usize].contains(&b))
@@ -752,48 +699,75 @@ impl Simplifier {
     }
 
     /// Cost every live pair (edges and τ partners, both vertices not
-    /// locked), sort, and set the pass's goal and cost limit.
+    /// locked), sort, and set the pass's goal and cost limit. Pairs are
+    /// listed by their lower vertex, then in fan order, and sorted stably
+    /// by cost: the order depends on nothing but the mesh (not on the
+    /// thread count).
     fn start_pass(&mut self, factor: f32) {
         let t0 = Instant::now();
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(self.live_tris * 3 / 2 + 16);
-        for v in 0..self.pos.len() as u32 {
-            let vi = v as usize;
-            if !self.alive[vi] {
-                continue;
-            }
-            let g = self.next_generation();
-            let alive = &self.tri_alive;
-            self.vtris[vi].retain(|&t| alive[t as usize]);
-            for &t in &self.vtris[vi] {
-                for &x in &self.tris[t as usize] {
-                    if x > v && self.mark[x as usize] != g {
-                        self.mark[x as usize] = g;
-                        if !(self.locked[vi] && self.locked[x as usize]) {
-                            pairs.push((v, x));
+        if self.pass.number == 0 || self.vtris.half_dead() {
+            self.vtris.rebuild(&self.tris, &self.tri_alive);
+        }
+        const CHUNK: usize = 2048;
+        let nv = self.pos.len();
+        let this = &*self;
+        let parts: Vec<Vec<Entry>> = (0..nv.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut out = Vec::with_capacity(3 * CHUNK);
+                let mut nb: Vec<u32> = Vec::with_capacity(32);
+                for v in (c * CHUNK) as u32..((c + 1) * CHUNK).min(nv) as u32 {
+                    let vi = v as usize;
+                    if !this.alive[vi] {
+                        continue;
+                    }
+                    // neighbours above v, each once, in fan order
+                    nb.clear();
+                    let mut add = |x: u32| {
+                        if x > v && !nb.contains(&x) {
+                            nb.push(x);
+                        }
+                    };
+                    for &t in this.vtris.fan(v) {
+                        if this.tri_alive[t as usize] {
+                            let [x, y, z] = this.tris[t as usize];
+                            add(x);
+                            add(y);
+                            add(z);
+                        }
+                    }
+                    for &x in &this.partners[vi] {
+                        if this.alive[x as usize] {
+                            add(x);
+                        }
+                    }
+                    for &x in &nb {
+                        if !(this.locked[vi] && this.locked[x as usize]) {
+                            out.push(this.entry(v, x));
                         }
                     }
                 }
-            }
-            for &x in &self.partners[vi] {
-                if x > v && self.alive[x as usize] && self.mark[x as usize] != g {
-                    self.mark[x as usize] = g;
-                    if !(self.locked[vi] && self.locked[x as usize]) {
-                        pairs.push((v, x));
-                    }
-                }
-            }
-        }
+                out
+            })
+            .collect();
         let mut queue: Vec<Entry> = std::mem::take(&mut self.pass.queue);
         queue.clear();
-        queue.par_extend(pairs.par_iter().map(|&(a, b)| self.entry(a, b)));
-        drop(pairs);
-        queue.par_sort_unstable();
+        queue.reserve(parts.iter().map(Vec::len).sum());
+        for p in parts {
+            queue.extend_from_slice(&p);
+        }
+        let mut scratch = std::mem::take(&mut self.pass.scratch);
+        radix_sort_by_key(&mut queue, &mut scratch, |e| f32_order_key(e.cost));
+        debug_assert!(queue
+            .windows(2)
+            .all(|w| w[0].cost.total_cmp(&w[1].cost).is_le()));
         let goal = self.live_tris.saturating_sub(self.target);
         // most contractions remove two triangles
         let limit = queue
             .get(goal / 2)
             .map_or(f32::INFINITY, |e| e.cost * factor);
         let pass = &mut self.pass;
+        pass.scratch = scratch;
         pass.number += 1;
         pass.open = true;
         pass.queue = queue;
@@ -868,7 +842,7 @@ impl Simplifier {
         let g = self.next_generation();
         let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
         let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
-        for &t in &self.vtris[i0] {
+        for &t in self.vtris.fan(v0) {
             if !self.tri_alive[t as usize] {
                 continue;
             }
@@ -895,7 +869,7 @@ impl Simplifier {
         let g2 = self.next_generation();
         debug_assert_ne!(g, g2);
         let mut common = 0;
-        for &t in &self.vtris[i1] {
+        for &t in self.vtris.fan(v1) {
             if !self.tri_alive[t as usize] {
                 continue;
             }
@@ -919,7 +893,7 @@ impl Simplifier {
             v0,
             v1,
             p,
-            &shared,
+            &opposite,
         )?;
         Ok(shared)
     }
@@ -932,8 +906,8 @@ impl Simplifier {
             let e = f.wedge_edits(
                 [v0, v1],
                 &self.tris,
-                &self.vtris[i0],
-                &self.vtris[i1],
+                self.vtris.fan(v0),
+                self.vtris.fan(v1),
                 &self.tri_alive,
                 &removed,
             );
@@ -946,25 +920,32 @@ impl Simplifier {
             p1: self.pos[i1],
             merged,
             removed,
-            moved: Vec::new(),
-            wedges: Vec::new(),
+            moved: self.log.mark()..self.log.mark(),
             error,
         };
         for &t in &record.removed {
             self.tri_alive[t as usize] = false;
         }
         self.live_tris -= record.removed.len();
-        let from = std::mem::take(&mut self.vtris[i0]);
-        let mut into = std::mem::take(&mut self.vtris[i1]);
-        into.retain(|&t| self.tri_alive[t as usize]);
-        for &t in &from {
+        // v1's new fan: its live triangles, then v0's moved ones
+        let mut into = std::mem::take(&mut self.fan_scratch);
+        into.clear();
+        into.extend(
+            self.vtris
+                .fan(v1)
+                .iter()
+                .copied()
+                .filter(|&t| self.tri_alive[t as usize]),
+        );
+        for i in 0..self.vtris.fan(v0).len() {
+            let t = self.vtris.fan(v0)[i];
             if !self.tri_alive[t as usize] {
                 continue;
             }
             let tri = &mut self.tris[t as usize];
             if let Some(k) = tri.iter().position(|&x| x == v0) {
                 tri[k] = v1;
-                record.moved.push(Corner {
+                self.log.corners.push(Corner {
                     triangle: t,
                     slot: k as u8,
                 });
@@ -974,11 +955,12 @@ impl Simplifier {
                     if let Some(w) = f.wedges.as_mut() {
                         w[t as usize][k] = e[1];
                     }
-                    record.wedges.push(e);
+                    self.log.wedges.push(e);
                 }
             }
         }
-        self.vtris[i1] = into;
+        self.vtris.set(v1, &into);
+        self.fan_scratch = into;
         self.pos[i1] = merged;
         let q0 = self.quadric[i0];
         self.quadric[i1] += q0;
@@ -999,7 +981,8 @@ impl Simplifier {
             p.dedup();
             self.partners[i1] = p;
         }
-        self.log.push(record);
+        record.moved.end = self.log.mark();
+        self.log.records.push(record);
         self.stats.collapses += 1;
         if self.opts.schedule != Schedule::Greedy {
             return;
@@ -1009,7 +992,10 @@ impl Simplifier {
         let g = self.next_generation();
         let mut ns = std::mem::take(&mut self.scratch);
         ns.clear();
-        for &t in &self.vtris[i1] {
+        if self.vtris.bloated() {
+            self.vtris.rebuild(&self.tris, &self.tri_alive);
+        }
+        for &t in self.vtris.fan(v1) {
             for &x in &self.tris[t as usize] {
                 if x != v1 && self.mark[x as usize] != g {
                     self.mark[x as usize] = g;
@@ -1061,6 +1047,104 @@ impl Simplifier {
     }
 }
 
+/// One vertex's classification and quadric (`Simplifier::new`).
+struct VertexInfo {
+    quadric: Quadric,
+    /// On an open border edge.
+    boundary: bool,
+    /// On a non-manifold edge, or where several fans meet.
+    locked: bool,
+}
+
+/// Classify `v` from its fan `ts`: each edge `(v, x)` is a border (one
+/// use), interior (one use in each direction) or non-manifold (anything
+/// else: locked); interior edges join the fan's triangles, and more than
+/// one fan locks `v` too. The quadric sums `v`'s face planes and, for each
+/// border edge, the constraint plane through it (GH97 §6.1).
+fn classify_vertex(
+    mesh: &Mesh,
+    ts: &[u32],
+    v: u32,
+    opts: &SimplifyOptions,
+    boundary_weight: f64,
+) -> VertexInfo {
+    let mut quadric = Quadric::default();
+    // (neighbour, 1 = edge leaves v, fan slot)
+    let mut uses: SmallVec<[(u32, u8, u32); 32]> = SmallVec::new();
+    for (i, &t) in ts.iter().enumerate() {
+        let tri = mesh.triangles[t as usize];
+        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+        uses.push((tri[(k + 1) % 3], 1, i as u32));
+        uses.push((tri[(k + 2) % 3], 0, i as u32));
+        let [p0, p1, p2] = tri.map(|x| dv(mesh.positions[x as usize]));
+        let n = (p1 - p0).cross(p2 - p0);
+        let len = n.length();
+        if len > 0.0 {
+            let unit = n / len;
+            let w = if opts.area_weighted { 0.5 * len } else { 1.0 };
+            quadric += Quadric::from_plane(unit, -unit.dot(p0), w);
+        }
+    }
+    uses.sort_unstable();
+    let mut parent: SmallVec<[u32; 16]> = (0..ts.len() as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let (mut boundary, mut locked) = (false, false);
+    for run in uses.chunk_by(|a, b| a.0 == b.0) {
+        match run {
+            [(x, _, slot)] => {
+                boundary = true;
+                if boundary_weight > 0.0 {
+                    let t = mesh.triangles[ts[*slot as usize] as usize];
+                    let (pa, pb) = (
+                        dv(mesh.positions[v as usize]),
+                        dv(mesh.positions[*x as usize]),
+                    );
+                    let e = pb - pa;
+                    let c = e.cross(face_normal(&mesh.positions, &t));
+                    let len = c.length();
+                    if len > 0.0 {
+                        let c = c / len;
+                        let w = boundary_weight
+                            * if opts.area_weighted {
+                                e.length_squared()
+                            } else {
+                                1.0
+                            };
+                        // constraint planes shape the cost, not the
+                        // mean-distance normalisation
+                        quadric += Quadric {
+                            weight: 0.0,
+                            ..Quadric::from_plane(c, -c.dot(pa), w)
+                        };
+                    }
+                }
+            }
+            [(_, da, sa), (_, db, sb)] if da != db => {
+                let (ra, rb) = (root(&mut parent, *sa), root(&mut parent, *sb));
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+            _ => locked = true,
+        }
+    }
+    if !locked {
+        let fans = (0..ts.len() as u32)
+            .filter(|&i| root(&mut parent, i) == i)
+            .count();
+        locked = fans > 1;
+    }
+    VertexInfo {
+        quadric,
+        boundary,
+        locked,
+    }
+}
+
 fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
     let [p0, p1, p2] = t.map(|v| dv(positions[v as usize]));
     (p1 - p0).cross(p2 - p0).normalize_or_zero()
@@ -1069,27 +1153,30 @@ fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
 /// The mesh state the legality tests read (shared by `Simplifier` and the
 /// curvature-adaptive sweeps).
 #[derive(Clone, Copy)]
-pub(crate) struct Faces<'a> {
+pub(crate) struct Faces<'a, F: FanLookup + ?Sized> {
     pub tris: &'a [[u32; 3]],
     pub alive: &'a [bool],
-    pub vtris: &'a [Vec<u32>],
+    pub vtris: &'a F,
     pub pos: &'a [[f32; 3]],
 }
 
 /// The geometric legality of contracting `v0` into `v1` at `p`, `shared`
-/// being the triangles on both (deleted): no moved face may flip (turn by
-/// more than [`FLIP_MIN_COS`]) or collapse to a sliver
-/// ([`DEGENERATE_AREA_RATIO_SQ`]), and no moved face may land on an existing
-/// one (a tetrahedron or small closed part flattening into a sheet).
-pub(crate) fn moved_faces_ok(
-    f: Faces<'_>,
+/// being the triangles on both (deleted) and `opposite` their third
+/// vertices, once the link condition holds: no moved face may flip (turn
+/// by more than [`FLIP_MIN_COS`]) or collapse to a sliver
+/// ([`DEGENERATE_AREA_RATIO_SQ`]), and no moved face may land on an
+/// existing one (a tetrahedron or small closed part flattening into a
+/// sheet).
+pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
+    f: Faces<'_, F>,
     v0: u32,
     v1: u32,
     p: DVec3,
-    shared: &[u32],
+    opposite: &[u32],
 ) -> Result<(), Rejected> {
     for (moving, other) in [(v0, v1), (v1, v0)] {
-        for &t in &f.vtris[moving as usize] {
+        let pm = dv(f.pos[moving as usize]);
+        for &t in f.vtris.fan(moving) {
             if !f.alive[t as usize] {
                 continue;
             }
@@ -1097,16 +1184,15 @@ pub(crate) fn moved_faces_ok(
             if tri.contains(&other) {
                 continue;
             }
-            let old = tri.map(|v| dv(f.pos[v as usize]));
-            let new = tri.map(|v| {
-                if v == moving {
-                    p
-                } else {
-                    dv(f.pos[v as usize])
-                }
-            });
-            let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
-            let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+            // the two other corners, in the triangle's winding order
+            let k = tri.iter().position(|&x| x == moving).unwrap_or(0);
+            let (b, c) = (
+                dv(f.pos[tri[(k + 1) % 3] as usize]),
+                dv(f.pos[tri[(k + 2) % 3] as usize]),
+            );
+            let bc = c - b;
+            let n_old = (b - pm).cross(bc);
+            let n_new = (b - p).cross(bc);
             let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
             if l_old > 0.0 {
                 if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
@@ -1118,19 +1204,17 @@ pub(crate) fn moved_faces_ok(
             }
         }
     }
-    for &t in &f.vtris[v0 as usize] {
-        if !f.alive[t as usize] || shared.contains(&t) {
-            continue;
-        }
-        let tri = f.tris[t as usize];
-        let xy: SmallVec<[u32; 2]> = tri.iter().copied().filter(|&x| x != v0).collect();
-        for &u in &f.vtris[v1 as usize] {
-            if f.alive[u as usize] && !shared.contains(&u) {
-                let o = f.tris[u as usize];
-                if o.contains(&xy[0]) && o.contains(&xy[1]) {
-                    return Err(Rejected::Duplicate);
-                }
-            }
+    // With the link condition, a moved face `v0 x y` can only land on an
+    // existing `v1 x y` when x and y are the two opposite vertices.
+    if let &[o1, o2] = opposite {
+        let has_face = |v: u32| {
+            f.vtris.fan(v).iter().any(|&t| {
+                let tri = f.tris[t as usize];
+                f.alive[t as usize] && tri.contains(&o1) && tri.contains(&o2)
+            })
+        };
+        if has_face(v0) && has_face(v1) {
+            return Err(Rejected::Duplicate);
         }
     }
     Ok(())

@@ -70,7 +70,7 @@ use crate::collapse::{
 use crate::mesh::{prepare, Mesh, MeshError};
 use crate::options::SimplifyOptions;
 use crate::quadric::Quadric;
-use crate::vsplit::{Contraction, Corner, ProgressiveMesh};
+use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh};
 use crate::Simplified;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -627,7 +627,7 @@ struct Engine {
     alive: Vec<bool>,
     fixed: Vec<bool>,
     live_tris: usize,
-    log: Vec<Contraction>,
+    log: Log,
     /// `v1`'s quadric before each logged contraction (for rollback).
     saved_quadric: Vec<Quadric>,
     /// Per-vertex marks with a generation counter.
@@ -683,7 +683,7 @@ impl Engine {
             alive: vec![true; nv],
             fixed,
             live_tris: mesh.triangles.len(),
-            log: Vec::new(),
+            log: Log::default(),
             saved_quadric: Vec::new(),
             mark: vec![0; nv],
             generation: 0,
@@ -827,7 +827,7 @@ impl Engine {
             let d =
                 (dv(self.pos[a as usize]) + dv(self.pos[b as usize]) + dv(self.pos[c as usize]))
                     / 3.0;
-            let mark = self.log.len();
+            let mark = self.log.records.len();
             if self.try_contract(a, b, d) && self.try_contract(c, b, d) {
                 if self.defects_ok(b, mark) {
                     return Some(b);
@@ -868,7 +868,7 @@ impl Engine {
                 }
             };
             for (v0, v1, p) in tries {
-                let mark = self.log.len();
+                let mark = self.log.records.len();
                 if self.try_contract(v0, v1, p) && self.defects_ok(v1, mark) {
                     return Some(v1);
                 }
@@ -943,13 +943,13 @@ impl Engine {
             Faces {
                 tris: &self.tris,
                 alive: &self.tri_alive,
-                vtris: &self.vtris,
+                vtris: self.vtris.as_slice(),
                 pos: &self.pos,
             },
             v0,
             v1,
             p,
-            &shared,
+            &opposite,
         )?;
         Ok(shared)
     }
@@ -972,8 +972,7 @@ impl Engine {
             p1: self.pos[i1],
             merged: fv(p),
             removed,
-            moved: Vec::new(),
-            wedges: Vec::new(),
+            moved: self.log.mark()..self.log.mark(),
             error: error as f32,
         };
         for &t in &record.removed {
@@ -988,7 +987,7 @@ impl Engine {
             let tri = &mut self.tris[t as usize];
             if let Some(slot) = tri.iter().position(|&x| x == v0) {
                 tri[slot] = v1;
-                record.moved.push(Corner {
+                self.log.corners.push(Corner {
                     triangle: t,
                     slot: slot as u8,
                 });
@@ -999,17 +998,21 @@ impl Engine {
         self.saved_quadric.push(self.quadric[i1]);
         self.quadric[i1] = q;
         self.alive[i0] = false;
-        self.log.push(record);
+        record.moved.end = self.log.mark();
+        self.log.records.push(record);
     }
 
     /// Undo the contractions logged after `mark`, newest first.
     fn rollback(&mut self, mark: usize) {
-        while self.log.len() > mark {
-            let Some(c) = self.log.pop() else { break };
+        while self.log.records.len() > mark {
+            let Some(c) = self.log.records.last().cloned() else {
+                break;
+            };
             let (i0, i1) = (c.v0 as usize, c.v1 as usize);
-            for k in &c.moved {
+            for k in self.log.moved(&c) {
                 self.tris[k.triangle as usize][k.slot as usize] = c.v0;
             }
+            self.log.pop();
             let keep = self.vtris[i1].len() - c.moved.len();
             self.vtris[i1].truncate(keep);
             for &t in &c.removed {
@@ -1102,7 +1105,7 @@ impl Engine {
             &self.log,
             None,
         );
-        self.stats.collapses = self.log.len();
+        self.stats.collapses = self.log.records.len();
         self.stats.output_triangles = self.live_tris;
         self.stats.output_vertices = pm.base.positions.len();
         self.stats.rejected = self.report.prevented;

@@ -21,6 +21,7 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
+mod adjacency;
 pub mod bvh;
 pub mod collapse;
 pub mod curvature;

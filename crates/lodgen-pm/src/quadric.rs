@@ -95,28 +95,28 @@ impl Quadric {
         p.is_finite().then_some(p)
     }
 
-    /// The best point on the segment `p0–p1`, compared with both ends and the
-    /// midpoint (the fallback of GH97 §4 and of the seed papers), returned
-    /// with its cost.
+    /// The best point on the segment `p0–p1` (the fallback of GH97 §4 and of
+    /// the seed papers, which compare both ends and the midpoint), returned
+    /// with its cost. Along the segment the cost is a convex quadratic in
+    /// `t`, so its minimiser clamped to `[0, 1]` is at least as good as the
+    /// ends and the midpoint; they are compared only when the quadratic is
+    /// flat or the minimiser is not finite.
     pub fn best_on_segment(&self, p0: DVec3, p1: DVec3) -> (DVec3, f64) {
-        let mut best = (p0, self.eval(p0));
-        let mut consider = |p: DVec3| {
-            let c = self.eval(p);
-            if c < best.1 {
-                best = (p, c);
-            }
-        };
-        consider(p1);
-        consider((p0 + p1) * 0.5);
-        // f(t) = f(p0 + t d) is quadratic in t: minimise it on [0, 1].
         let d = p1 - p0;
-        let qd = self.mul3(d);
-        let a = d.dot(qd);
+        let a = d.dot(self.mul3(d));
         if a > 0.0 {
             let b = d.dot(self.mul3(p0)) + d.dot(DVec3::new(self.ad, self.bd, self.cd));
             let t = (-b / a).clamp(0.0, 1.0);
             if t.is_finite() {
-                consider(p0 + d * t);
+                let p = p0 + d * t;
+                return (p, self.eval(p));
+            }
+        }
+        let mut best = (p0, self.eval(p0));
+        for p in [p1, (p0 + p1) * 0.5] {
+            let c = self.eval(p);
+            if c < best.1 {
+                best = (p, c);
             }
         }
         best
@@ -127,8 +127,8 @@ impl Quadric {
     /// [`Quadric::best_on_segment`].
     pub fn placement(&self, p0: DVec3, p1: DVec3) -> (DVec3, f64) {
         if let Some(p) = self.optimize() {
-            let reach = MAX_OPTIMUM_REACH * (p1 - p0).length();
-            if (p - (p0 + p1) * 0.5).length() <= reach {
+            let reach2 = MAX_OPTIMUM_REACH * MAX_OPTIMUM_REACH * (p1 - p0).length_squared();
+            if (p - (p0 + p1) * 0.5).length_squared() <= reach2 {
                 return (p, self.eval(p));
             }
         }

@@ -619,7 +619,7 @@ fn parse_record(
         p_merged: state.mesh.positions[v1 as usize],
         p0: h.dequantize(q0),
         faces,
-        corners,
+        corners: SmallVec::from_vec(corners),
         error,
     };
     Ok((split, q1, q0))

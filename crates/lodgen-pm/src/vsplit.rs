@@ -47,8 +47,9 @@ pub struct VertexSplit {
     /// order: two for an interior edge (`fl`, `fr`), one on a border, none
     /// for a non-edge (τ) pair.
     pub faces: SmallVec<[[u32; 3]; 2]>,
-    /// The corners that go from `v1` back to `v0`, sorted.
-    pub corners: Vec<Corner>,
+    /// The corners that go from `v1` back to `v0`, sorted (inline up to
+    /// six, which is most splits: no allocation per split).
+    pub corners: SmallVec<[Corner; 6]>,
     /// The contraction's quadric error: root mean squared distance from the
     /// new vertex to the planes it carries (mesh units).
     pub error: f32,
@@ -93,7 +94,7 @@ pub struct SplitWedges {
 }
 
 /// A contraction as the simplifier records it, in the welded input's
-/// numbering (see `collapse`).
+/// numbering (see `collapse`). Its moved corners are `log.corners[moved]`.
 #[derive(Clone, Debug)]
 pub(crate) struct Contraction {
     pub v0: u32,
@@ -102,11 +103,48 @@ pub(crate) struct Contraction {
     pub p1: [f32; 3],
     pub merged: [f32; 3],
     pub removed: SmallVec<[u32; 2]>,
-    pub moved: Vec<Corner>,
-    /// Parallel to `moved` when wedges are tracked: `[before, after]` the
-    /// contraction. Empty otherwise.
-    pub wedges: Vec<[u32; 2]>,
+    pub moved: std::ops::Range<u32>,
     pub error: f32,
+}
+
+/// The simplifiers' contraction log: the records, and one arena for all
+/// their moved corners (and wedge edits), so that logging a contraction
+/// allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Log {
+    pub records: Vec<Contraction>,
+    pub corners: Vec<Corner>,
+    /// Parallel to `corners` when wedges are tracked: `[before, after]`
+    /// the contraction. Empty otherwise.
+    pub wedges: Vec<[u32; 2]>,
+}
+
+impl Log {
+    pub fn with_capacity(contractions: usize) -> Log {
+        Log {
+            records: Vec::with_capacity(contractions),
+            corners: Vec::with_capacity(contractions * 9 / 2),
+            wedges: Vec::new(),
+        }
+    }
+
+    /// The next corner's index, for `Contraction::moved`.
+    pub fn mark(&self) -> u32 {
+        self.corners.len() as u32
+    }
+
+    pub fn moved(&self, c: &Contraction) -> &[Corner] {
+        &self.corners[c.moved.start as usize..c.moved.end as usize]
+    }
+
+    /// Remove the newest record and its corners.
+    pub fn pop(&mut self) -> Option<Contraction> {
+        let c = self.records.pop()?;
+        self.corners.truncate(c.moved.start as usize);
+        self.wedges
+            .truncate(self.wedges.len().min(c.moved.start as usize));
+        Some(c)
+    }
 }
 
 impl ProgressiveMesh {
@@ -116,9 +154,10 @@ impl ProgressiveMesh {
         triangles: &[[u32; 3]],
         vertex_alive: &[bool],
         triangle_alive: &[bool],
-        log: &[Contraction],
+        log: &Log,
         wedges: Option<&[[u32; 3]]>,
     ) -> ProgressiveMesh {
+        let (records, tracked) = (&log.records, !log.wedges.is_empty());
         const NONE: u32 = u32::MAX;
         let mut vnew = vec![NONE; positions.len()];
         let mut tnew = vec![NONE; triangles.len()];
@@ -138,7 +177,7 @@ impl ProgressiveMesh {
         }
         let base_vertices = vertex_origin.len();
         let base_triangles = triangle_origin.len();
-        for c in log.iter().rev() {
+        for c in records.iter().rev() {
             vnew[c.v0 as usize] = vertex_origin.len() as u32;
             vertex_origin.push(c.v0);
             for &t in &c.removed {
@@ -161,25 +200,28 @@ impl ProgressiveMesh {
                 .map(|&t| map(&triangles[t as usize]))
                 .collect(),
         };
-        let mut split_wedges = Vec::with_capacity(if wedges.is_some() { log.len() } else { 0 });
-        let splits = log
+        let mut split_wedges = Vec::with_capacity(if wedges.is_some() { records.len() } else { 0 });
+        let mut corners: Vec<(Corner, [u32; 2])> = Vec::new();
+        let splits = records
             .iter()
             .rev()
             .map(|c| {
-                let mut corners: Vec<(Corner, [u32; 2])> = c
-                    .moved
-                    .iter()
-                    .enumerate()
-                    .map(|(i, k)| {
-                        let corner = Corner {
-                            triangle: tnew[k.triangle as usize],
-                            slot: k.slot,
-                        };
-                        // a split undoes the contraction: after ↔ before
-                        let w = c.wedges.get(i).map_or([0; 2], |w| [w[1], w[0]]);
-                        (corner, w)
-                    })
-                    .collect();
+                corners.clear();
+                let range = c.moved.start as usize..c.moved.end as usize;
+                corners.extend(log.corners[range.clone()].iter().zip(range).map(|(k, i)| {
+                    let corner = Corner {
+                        triangle: tnew[k.triangle as usize],
+                        slot: k.slot,
+                    };
+                    // a split undoes the contraction: after ↔ before
+                    let w = if tracked {
+                        let w = log.wedges[i];
+                        [w[1], w[0]]
+                    } else {
+                        [0; 2]
+                    };
+                    (corner, w)
+                }));
                 corners.sort_unstable();
                 if let Some(w) = wedges {
                     split_wedges.push(SplitWedges {
@@ -187,7 +229,7 @@ impl ProgressiveMesh {
                         corners: corners.iter().map(|c| c.1).collect(),
                     });
                 }
-                let corners = corners.into_iter().map(|c| c.0).collect();
+                let corners = corners.iter().map(|c| c.0).collect();
                 VertexSplit {
                     v1: vnew[c.v1 as usize],
                     v0: vnew[c.v0 as usize],
