@@ -58,6 +58,23 @@ fn subdivide(m: &Mesh) -> Mesh {
     }
 }
 
+/// Peak resident memory (kB) since the last `reset_peak`.
+fn peak_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let path = args
@@ -74,12 +91,22 @@ fn main() {
     let n = m.triangles.len();
     let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
     for run in 0..3 {
+        reset_peak();
+        let base = peak_kb();
+        let per_tri = |kb: u64| (kb.saturating_sub(base) * 1024) as f64 / n as f64;
         let t = Instant::now();
         let p = prepare(&m.positions, &indices).unwrap();
         let t_prepare = t.elapsed();
-        let mut s = Simplifier::new(&p.mesh, &opts).unwrap();
+        let m_prepare = per_tri(peak_kb());
+        let mut s = Simplifier::from_mesh(p.mesh, &opts).unwrap();
+        let m_new = per_tri(peak_kb());
         s.run();
+        let m_run = per_tri(peak_kb());
         let (pm, stats) = s.finish();
+        let m_finish = per_tri(peak_kb());
+        println!(
+            "peak bytes/triangle after prepare {m_prepare:.0}, new {m_new:.0}, run {m_run:.0}, finish {m_finish:.0}"
+        );
         let t_levels = Instant::now();
         let mut c = pm.cursor();
         let mut tris = 0;

@@ -8,12 +8,12 @@
 
 use crate::adjacency::{FanLookup, Fans};
 use crate::features::{AttributeCost, Features};
-use crate::heap::{f32_order_key, radix_sort_by_key, QuadHeap};
+use crate::heap::{f32_order_key, radix_sort_parts, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
 use crate::quadric::Quadric;
-use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh};
+use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh, Removed};
 use glam::DVec3;
 use rayon::prelude::*;
 use smallvec::SmallVec;
@@ -200,8 +200,9 @@ pub struct Simplifier {
     tri_alive: Vec<bool>,
     /// Vertex → incident triangles; may hold dead triangles (skipped).
     vtris: Fans,
-    /// Vertex → non-edge τ partners.
+    /// Vertex → non-edge τ partners (empty when there are none).
     partners: Vec<Vec<u32>>,
+    /// Vertex → version stamp ([`Schedule::Greedy`] only, else empty).
     version: Vec<u16>,
     alive: Vec<bool>,
     locked: Vec<bool>,
@@ -228,6 +229,15 @@ pub struct Simplifier {
     attributes: Option<AttributeCost>,
 }
 
+/// A candidate of a pass: 12 bytes (the pass list and its sort buffer are
+/// the largest allocations of the first pass).
+#[derive(Clone, Copy, Debug, Default)]
+struct PassEntry {
+    cost: f32,
+    a: u32,
+    b: u32,
+}
+
 /// The state of the pass in progress ([`Schedule::Passes`]).
 #[derive(Debug, Default)]
 struct Pass {
@@ -236,9 +246,9 @@ struct Pass {
     /// Whether `queue` is a started pass (false after a rebuild).
     open: bool,
     /// The pass's candidates, sorted; `cursor` is the next one.
-    queue: Vec<Entry>,
+    queue: Vec<PassEntry>,
     /// The radix sort's buffer.
-    scratch: Vec<Entry>,
+    scratch: Vec<PassEntry>,
     cursor: usize,
     /// Vertex → the last pass that moved or removed it.
     touched: Vec<u32>,
@@ -267,6 +277,11 @@ impl Simplifier {
     /// Set up quadrics, classification, pairs and the heap. The mesh must be
     /// clean (see [`crate::mesh::prepare`]): no repeated corner in a triangle.
     pub fn new(mesh: &Mesh, opts: &SimplifyOptions) -> Result<Simplifier, MeshError> {
+        Self::from_mesh(mesh.clone(), opts)
+    }
+
+    /// [`Simplifier::new`], taking the mesh over instead of copying it.
+    pub fn from_mesh(mesh: Mesh, opts: &SimplifyOptions) -> Result<Simplifier, MeshError> {
         mesh.validate()?;
         if mesh.triangles.is_empty() {
             return Err(MeshError::Empty(""));
@@ -287,14 +302,13 @@ impl Simplifier {
             Boundary::Weighted(w) => w,
             Boundary::Locked => 0.0,
         };
-        let infos: Vec<VertexInfo> = (0..nv as u32)
+        let (quadric, (boundary, locked)): (Vec<Quadric>, (Vec<bool>, Vec<bool>)) = (0..nv as u32)
             .into_par_iter()
-            .map(|v| classify_vertex(mesh, vtris.fan(v), v, opts, boundary_weight))
-            .collect();
-        let quadric: Vec<Quadric> = infos.par_iter().map(|i| i.quadric).collect();
-        let boundary: Vec<bool> = infos.iter().map(|i| i.boundary).collect();
-        let locked: Vec<bool> = infos.iter().map(|i| i.locked).collect();
-        drop(infos);
+            .map(|v| {
+                let i = classify_vertex(&mesh, vtris.fan(v), v, opts, boundary_weight);
+                (i.quadric, (i.boundary, i.locked))
+            })
+            .unzip();
         let tau = opts.tau_for(mesh.diagonal());
         // Sorted edges (only the greedy heap and τ pairs need the list).
         let mut edges: Vec<(u32, u32)> = if opts.schedule == Schedule::Greedy || tau > 0.0 {
@@ -322,13 +336,17 @@ impl Simplifier {
         let mut s = Simplifier {
             opts: *opts,
             target: opts.target_for(nt),
-            pos: mesh.positions.clone(),
+            pos: mesh.positions,
             quadric,
-            tris: mesh.triangles.clone(),
+            tris: mesh.triangles,
             tri_alive: vec![true; nt],
             vtris,
-            partners: vec![Vec::new(); nv],
-            version: vec![0; nv],
+            partners: Vec::new(),
+            version: if opts.schedule == Schedule::Greedy {
+                vec![0; nv]
+            } else {
+                Vec::new()
+            },
             alive: vec![true; nv],
             locked,
             boundary,
@@ -359,8 +377,11 @@ impl Simplifier {
         stats.time.setup = t0.elapsed();
 
         let t1 = Instant::now();
-        let near = pairs::near_pairs(&mesh.positions, &edges, tau);
+        let near = pairs::near_pairs(&s.pos, &edges, tau);
         stats.near_pairs = near.len();
+        if !near.is_empty() {
+            s.partners = vec![Vec::new(); nv];
+        }
         for &(a, b) in &near {
             s.partners[a as usize].push(b);
             s.partners[b as usize].push(a);
@@ -415,6 +436,12 @@ impl Simplifier {
                 }
             },
         }
+    }
+
+    /// `v`'s τ partners.
+    #[inline]
+    fn partners(&self, v: u32) -> &[u32] {
+        self.partners.get(v as usize).map_or(&[], |p| p)
     }
 
     /// On a border or a feature line: never moves to a new position.
@@ -574,6 +601,18 @@ impl Simplifier {
 
     fn entry(&self, a: u32, b: u32) -> Entry {
         let (a, b) = (a.min(b), a.max(b));
+        Entry {
+            cost: self.key(a, b),
+            a,
+            b,
+            va: self.version.get(a as usize).copied().unwrap_or(0),
+            vb: self.version.get(b as usize).copied().unwrap_or(0),
+        }
+    }
+
+    /// The order key of the pair `(a, b)`, `a < b`: its quadric cost, plus
+    /// the attribute term, times the cost scale.
+    fn key(&self, a: u32, b: u32) -> f32 {
         let (p, mut cost) = self.target_of(a, b);
         if let Some(at) = &self.attributes {
             // the farther endpoint is the one removed (as in `step`)
@@ -587,13 +626,7 @@ impl Simplifier {
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
         }
-        Entry {
-            cost: cost as f32,
-            a,
-            b,
-            va: self.version[a as usize],
-            vb: self.version[b as usize],
-        }
+        cost as f32
     }
 
     /// Live triangles now.
@@ -711,7 +744,7 @@ impl Simplifier {
         const CHUNK: usize = 2048;
         let nv = self.pos.len();
         let this = &*self;
-        let parts: Vec<Vec<Entry>> = (0..nv.div_ceil(CHUNK))
+        let parts: Vec<Vec<PassEntry>> = (0..nv.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut out = Vec::with_capacity(3 * CHUNK);
@@ -736,28 +769,27 @@ impl Simplifier {
                             add(z);
                         }
                     }
-                    for &x in &this.partners[vi] {
+                    for &x in this.partners(v) {
                         if this.alive[x as usize] {
                             add(x);
                         }
                     }
                     for &x in &nb {
                         if !(this.locked[vi] && this.locked[x as usize]) {
-                            out.push(this.entry(v, x));
+                            out.push(PassEntry {
+                                cost: this.key(v, x),
+                                a: v,
+                                b: x,
+                            });
                         }
                     }
                 }
                 out
             })
             .collect();
-        let mut queue: Vec<Entry> = std::mem::take(&mut self.pass.queue);
-        queue.clear();
-        queue.reserve(parts.iter().map(Vec::len).sum());
-        for p in parts {
-            queue.extend_from_slice(&p);
-        }
+        let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
         let mut scratch = std::mem::take(&mut self.pass.scratch);
-        radix_sort_by_key(&mut queue, &mut scratch, |e| f32_order_key(e.cost));
+        radix_sort_parts(parts, &mut queue, &mut scratch, |e| f32_order_key(e.cost));
         debug_assert!(queue
             .windows(2)
             .all(|w| w[0].cost.total_cmp(&w[1].cost).is_le()));
@@ -916,10 +948,8 @@ impl Simplifier {
         let mut record = Contraction {
             v0,
             v1,
-            p0: self.pos[i0],
             p1: self.pos[i1],
-            merged,
-            removed,
+            removed: Removed::new(&removed),
             moved: self.log.mark()..self.log.mark(),
             error,
         };
@@ -945,7 +975,7 @@ impl Simplifier {
             let tri = &mut self.tris[t as usize];
             if let Some(k) = tri.iter().position(|&x| x == v0) {
                 tri[k] = v1;
-                self.log.corners.push(Corner {
+                self.log.push_corner(Corner {
                     triangle: t,
                     slot: k as u8,
                 });
@@ -965,7 +995,9 @@ impl Simplifier {
         let q0 = self.quadric[i0];
         self.quadric[i1] += q0;
         self.alive[i0] = false;
-        self.version[i1] = self.version[i1].wrapping_add(1);
+        if let Some(v) = self.version.get_mut(i1) {
+            *v = v.wrapping_add(1);
+        }
         self.boundary[i1] |= self.boundary[i0];
         if let Some(f) = &mut self.features {
             f.contract(v0, v1);
@@ -973,7 +1005,7 @@ impl Simplifier {
         if let Some(at) = &mut self.attributes {
             at.area[i1] += at.area[i0];
         }
-        if !self.partners[i0].is_empty() || !self.partners[i1].is_empty() {
+        if !self.partners(v0).is_empty() || !self.partners(v1).is_empty() {
             let mut p = std::mem::take(&mut self.partners[i0]);
             p.append(&mut self.partners[i1]);
             p.retain(|&x| x != v1 && x != v0 && self.alive[x as usize]);
@@ -1003,7 +1035,7 @@ impl Simplifier {
                 }
             }
         }
-        for &x in &self.partners[i1] {
+        for &x in self.partners.get(i1).map_or(&[][..], |p| &p[..]) {
             if self.mark[x as usize] != g {
                 self.mark[x as usize] = g;
                 ns.push(x);
@@ -1032,6 +1064,17 @@ impl Simplifier {
     /// Turn the log into the progressive mesh.
     pub fn finish(mut self) -> (ProgressiveMesh, Stats) {
         let t0 = Instant::now();
+        // free what the log's renumbering does not read before it
+        // allocates the progressive mesh (peak memory)
+        self.pass = Pass::default();
+        self.heap = QuadHeap::from_vec(Vec::new());
+        self.vtris = Fans::default();
+        self.quadric = Vec::new();
+        self.partners = Vec::new();
+        self.mark = Vec::new();
+        self.version = Vec::new();
+        self.attributes = None;
+        self.cost_scale = None;
         let pm = ProgressiveMesh::from_log(
             &self.pos,
             &self.tris,

@@ -70,7 +70,7 @@ use crate::collapse::{
 use crate::mesh::{prepare, Mesh, MeshError};
 use crate::options::SimplifyOptions;
 use crate::quadric::Quadric;
-use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh};
+use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh, Removed};
 use crate::Simplified;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -968,10 +968,8 @@ impl Engine {
         let mut record = Contraction {
             v0,
             v1,
-            p0: self.pos[i0],
             p1: self.pos[i1],
-            merged: fv(p),
-            removed,
+            removed: Removed::new(&removed),
             moved: self.log.mark()..self.log.mark(),
             error: error as f32,
         };
@@ -987,14 +985,14 @@ impl Engine {
             let tri = &mut self.tris[t as usize];
             if let Some(slot) = tri.iter().position(|&x| x == v0) {
                 tri[slot] = v1;
-                self.log.corners.push(Corner {
+                self.log.push_corner(Corner {
                     triangle: t,
                     slot: slot as u8,
                 });
                 self.vtris[i1].push(t);
             }
         }
-        self.pos[i1] = record.merged;
+        self.pos[i1] = fv(p);
         self.saved_quadric.push(self.quadric[i1]);
         self.quadric[i1] = q;
         self.alive[i0] = false;

@@ -136,19 +136,34 @@ pub fn radix_sort_by_key<T: Copy>(
     scratch: &mut Vec<T>,
     key: impl Fn(&T) -> u32,
 ) {
+    let input = std::mem::take(items);
+    radix_sort_parts(vec![input], items, scratch, key);
+}
+
+/// [`radix_sort_by_key`] of the concatenation of `parts`, into `out`:
+/// the first pass reads the parts directly and frees them, so they are
+/// never copied into one list first (peak memory).
+pub fn radix_sort_parts<T: Copy>(
+    parts: Vec<Vec<T>>,
+    out: &mut Vec<T>,
+    scratch: &mut Vec<T>,
+    key: impl Fn(&T) -> u32,
+) {
     const BITS: u32 = 11;
     const BUCKETS: usize = 1 << BITS;
-    let n = items.len();
-    if n < 2 {
+    let n: usize = parts.iter().map(Vec::len).sum();
+    let Some(&first) = parts.iter().find_map(|p| p.first()) else {
+        out.clear();
         return;
-    }
+    };
     let mut counts = vec![[0u32; BUCKETS]; 3];
-    for it in items.iter() {
+    for it in parts.iter().flatten() {
         let k = key(it);
         for (d, c) in counts.iter_mut().enumerate() {
             c[((k >> (BITS * d as u32)) as usize) & (BUCKETS - 1)] += 1;
         }
     }
+    let mut parts = Some(parts);
     for (d, c) in counts.iter_mut().enumerate() {
         if c.iter().any(|&x| x as usize == n) {
             continue; // this digit is the same for every item
@@ -159,15 +174,36 @@ pub fn radix_sort_by_key<T: Copy>(
             *x = sum;
             sum += v;
         }
-        scratch.clear();
-        scratch.resize(n, items[0]);
         let shift = BITS * d as u32;
-        for it in items.iter() {
+        let mut scatter = |dst: &mut Vec<T>, it: &T| {
             let b = ((key(it) >> shift) as usize) & (BUCKETS - 1);
-            scratch[c[b] as usize] = *it;
+            dst[c[b] as usize] = *it;
             c[b] += 1;
+        };
+        if let Some(parts) = parts.take() {
+            out.clear();
+            out.resize(n, first);
+            for part in parts {
+                for it in &part {
+                    scatter(out, it);
+                }
+            }
+        } else {
+            scratch.clear();
+            scratch.resize(n, first);
+            for it in out.iter() {
+                scatter(scratch, it);
+            }
+            std::mem::swap(out, scratch);
         }
-        std::mem::swap(items, scratch);
+    }
+    if let Some(parts) = parts {
+        // every digit was constant: already in order
+        out.clear();
+        out.reserve(n);
+        for part in parts {
+            out.extend_from_slice(&part);
+        }
     }
 }
 

@@ -73,7 +73,7 @@ pub fn simplify(
     opts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
     let prepared = prepare(positions, indices)?;
-    let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {
@@ -112,10 +112,10 @@ pub fn simplify_with_wedges(
         });
     }
     let prepared = prepare(positions, indices)?;
-    let mut s = Simplifier::new(&prepared.mesh, opts)?;
+    let nw = prepared.mesh.positions.len();
+    let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     if dims > 0 {
         // each welded vertex takes the values of its first input vertex
-        let nw = prepared.mesh.positions.len();
         let mut values = vec![f32::NAN; dims * nw];
         for (v, &w) in prepared.vertex_map.iter().enumerate() {
             let w = w as usize;

@@ -33,6 +33,8 @@ pub enum MeshError {
     Empty(&'static str),
     #[error("the mesh has {0} vertices; at most 2^32 - 1 are supported")]
     TooLarge(usize),
+    #[error("the mesh has {0} triangles; at most 2^30 - 1 are supported")]
+    TooManyTriangles(usize),
     #[error("{len} attribute values for {vertex_count} vertices of {dims} components")]
     AttributeCount {
         len: usize,
@@ -90,27 +92,7 @@ impl Mesh {
 
     /// Check indices and coordinates.
     pub fn validate(&self) -> Result<(), MeshError> {
-        if self.positions.len() >= u32::MAX as usize {
-            return Err(MeshError::TooLarge(self.positions.len()));
-        }
-        for (vertex, p) in self.positions.iter().enumerate() {
-            if !p.iter().all(|c| c.is_finite()) {
-                return Err(MeshError::NonFinite { vertex, value: *p });
-            }
-        }
-        let n = self.positions.len();
-        for (triangle, t) in self.triangles.iter().enumerate() {
-            for &index in t {
-                if index as usize >= n {
-                    return Err(MeshError::IndexOutOfRange {
-                        triangle,
-                        index,
-                        vertex_count: n,
-                    });
-                }
-            }
-        }
-        Ok(())
+        validate_parts(&self.positions, self.triangles.iter().copied())
     }
 
     /// Axis-aligned bounds `(min, max)`; `None` when there are no vertices.
@@ -141,6 +123,40 @@ impl Mesh {
 /// The key positions are welded by: bit patterns, with -0.0 folded into 0.0.
 fn weld_key(p: &[f32; 3]) -> [u32; 3] {
     p.map(|c| if c == 0.0 { 0 } else { c.to_bits() })
+}
+
+/// [`Mesh::validate`] on borrowed data.
+fn validate_parts(
+    positions: &[[f32; 3]],
+    triangles: impl Iterator<Item = [u32; 3]>,
+) -> Result<(), MeshError> {
+    if positions.len() >= u32::MAX as usize {
+        return Err(MeshError::TooLarge(positions.len()));
+    }
+    for (vertex, p) in positions.iter().enumerate() {
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(MeshError::NonFinite { vertex, value: *p });
+        }
+    }
+    let n = positions.len();
+    let mut count = 0;
+    for (triangle, t) in triangles.enumerate() {
+        count = triangle + 1;
+        for index in t {
+            if index as usize >= n {
+                return Err(MeshError::IndexOutOfRange {
+                    triangle,
+                    index,
+                    vertex_count: n,
+                });
+            }
+        }
+    }
+    if count >= 1 << 30 {
+        // the log packs (triangle, corner slot) into one u32
+        return Err(MeshError::TooManyTriangles(count));
+    }
+    Ok(())
 }
 
 /// "The first item with the same key": an open-addressing hash table of
@@ -196,20 +212,17 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     if indices.len() % 3 != 0 {
         return Err(MeshError::IndexCount(indices.len()));
     }
-    let input = Mesh {
-        positions: positions.to_vec(),
-        triangles: indices
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect(),
-    };
-    input.validate()?;
-    if input.triangles.is_empty() {
+    // read in place, not copied (peak memory)
+    let tri_at = |t: usize| [indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]];
+    let input_count = indices.len() / 3;
+    let input_triangles = || indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
+    validate_parts(positions, input_triangles())?;
+    if input_count == 0 {
         return Err(MeshError::Empty(""));
     }
     let mut stats = PrepareStats {
         input_vertices: positions.len(),
-        input_triangles: input.triangles.len(),
+        input_triangles: input_count,
         ..PrepareStats::default()
     };
 
@@ -222,17 +235,17 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     // Number welded vertices by first use; drop bad triangles.
     let mut vertex_map = vec![u32::MAX; positions.len()];
     let mut welded_positions = Vec::new();
-    let mut triangles = Vec::with_capacity(input.triangles.len());
-    let mut triangle_map = Vec::with_capacity(input.triangles.len());
+    let mut triangles = Vec::with_capacity(input_count);
+    let mut triangle_map = Vec::with_capacity(input_count);
     // Duplicates: keep the first triangle on each vertex set.
     let tri_key = |ti: u32| {
-        let mut k = input.triangles[ti as usize].map(|i| canonical[i as usize]);
+        let mut k = tri_at(ti as usize).map(|i| canonical[i as usize]);
         k.sort_unstable();
         k
     };
-    let mut table = FirstOf::new(input.triangles.len());
-    let mut keep = vec![false; input.triangles.len()];
-    for (ti, t) in input.triangles.iter().enumerate() {
+    let mut table = FirstOf::new(input_count);
+    let mut keep = vec![false; input_count];
+    for (ti, t) in input_triangles().enumerate() {
         let c = t.map(|i| canonical[i as usize]);
         if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
             stats.degenerate_triangles += 1;
@@ -244,7 +257,7 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
             stats.duplicate_triangles += 1;
         }
     }
-    for (ti, t) in input.triangles.iter().enumerate() {
+    for (ti, t) in input_triangles().enumerate() {
         if !keep[ti] {
             continue;
         }

@@ -94,17 +94,56 @@ pub struct SplitWedges {
 }
 
 /// A contraction as the simplifier records it, in the welded input's
-/// numbering (see `collapse`). Its moved corners are `log.corners[moved]`.
+/// numbering (see `collapse`). Its moved corners are `log.moved(c)`.
+/// `v0`'s position and the merged one are not stored: a removed vertex
+/// keeps its last position in the simplifier's final state, and the merged
+/// position is `v1`'s position after the contraction, i.e. the `p1` of the
+/// next contraction into `v1`, or `v1`'s final position (`from_log`).
 #[derive(Clone, Debug)]
 pub(crate) struct Contraction {
     pub v0: u32,
     pub v1: u32,
-    pub p0: [f32; 3],
+    /// `v1`'s position before the contraction.
     pub p1: [f32; 3],
-    pub merged: [f32; 3],
-    pub removed: SmallVec<[u32; 2]>,
+    pub removed: Removed,
     pub moved: std::ops::Range<u32>,
     pub error: f32,
+}
+
+/// The triangles a contraction deletes: at most two (a τ pair deletes
+/// none, a border edge one). 12 bytes, where a `SmallVec` took 32: the log
+/// holds one per contraction.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Removed {
+    t: [u32; 2],
+    n: u32,
+}
+
+impl Removed {
+    /// Panics beyond two triangles (the link condition rejects those).
+    pub fn new(ts: &[u32]) -> Removed {
+        let mut t = [u32::MAX; 2];
+        t[..ts.len()].copy_from_slice(ts);
+        Removed {
+            t,
+            n: ts.len() as u32,
+        }
+    }
+}
+
+impl std::ops::Deref for Removed {
+    type Target = [u32];
+    fn deref(&self) -> &[u32] {
+        &self.t[..self.n as usize]
+    }
+}
+
+impl<'a> IntoIterator for &'a Removed {
+    type Item = &'a u32;
+    type IntoIter = std::slice::Iter<'a, u32>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
 }
 
 /// The simplifiers' contraction log: the records, and one arena for all
@@ -113,7 +152,9 @@ pub(crate) struct Contraction {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Log {
     pub records: Vec<Contraction>,
-    pub corners: Vec<Corner>,
+    /// Moved corners packed as `triangle << 2 | slot` (4 bytes, not 8:
+    /// meshes have fewer than 2^30 triangles, see `Mesh::validate`).
+    corners: Vec<u32>,
     /// Parallel to `corners` when wedges are tracked: `[before, after]`
     /// the contraction. Empty otherwise.
     pub wedges: Vec<[u32; 2]>,
@@ -133,8 +174,17 @@ impl Log {
         self.corners.len() as u32
     }
 
-    pub fn moved(&self, c: &Contraction) -> &[Corner] {
-        &self.corners[c.moved.start as usize..c.moved.end as usize]
+    pub fn push_corner(&mut self, c: Corner) {
+        self.corners.push(c.triangle << 2 | u32::from(c.slot));
+    }
+
+    pub fn moved(&self, c: &Contraction) -> impl Iterator<Item = Corner> + '_ {
+        self.corners[c.moved.start as usize..c.moved.end as usize]
+            .iter()
+            .map(|&k| Corner {
+                triangle: k >> 2,
+                slot: (k & 3) as u8,
+            })
     }
 
     /// Remove the newest record and its corners.
@@ -158,6 +208,9 @@ impl ProgressiveMesh {
         wedges: Option<&[[u32; 3]]>,
     ) -> ProgressiveMesh {
         let (records, tracked) = (&log.records, !log.wedges.is_empty());
+        // every vertex's position after the contraction being renumbered:
+        // walking the log backwards, `v1` goes back to `p1`
+        let mut current = positions.to_vec();
         const NONE: u32 = u32::MAX;
         let mut vnew = vec![NONE; positions.len()];
         let mut tnew = vec![NONE; triangles.len()];
@@ -208,7 +261,7 @@ impl ProgressiveMesh {
             .map(|c| {
                 corners.clear();
                 let range = c.moved.start as usize..c.moved.end as usize;
-                corners.extend(log.corners[range.clone()].iter().zip(range).map(|(k, i)| {
+                corners.extend(log.moved(c).zip(range).map(|(k, i)| {
                     let corner = Corner {
                         triangle: tnew[k.triangle as usize],
                         slot: k.slot,
@@ -230,12 +283,14 @@ impl ProgressiveMesh {
                     });
                 }
                 let corners = corners.iter().map(|c| c.0).collect();
+                let p_merged = current[c.v1 as usize];
+                current[c.v1 as usize] = c.p1;
                 VertexSplit {
                     v1: vnew[c.v1 as usize],
                     v0: vnew[c.v0 as usize],
                     p1: c.p1,
-                    p_merged: c.merged,
-                    p0: c.p0,
+                    p_merged,
+                    p0: positions[c.v0 as usize],
                     faces: c
                         .removed
                         .iter()
