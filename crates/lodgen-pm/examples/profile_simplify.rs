@@ -1,11 +1,15 @@
 //! Phase times of one simplification (prepare, setup, pairs, heap, loop,
 //! log, level extraction), to see where the time goes.
 //!
-//! `cargo run --release -p lodgen-pm --example profile_simplify [path/to/mesh.obj] [subdivisions] [ratio]`
+//! `cargo run --release -p lodgen-pm --example profile_simplify [path/to/mesh.obj] [subdivisions] [ratio] [greedy|pass factor]`
+//!
+//! Ends with the symmetric Hausdorff distance of the last run's coarsest
+//! level, so schedules can be compared on time and quality at once.
 
 use std::time::Instant;
 
-use lodgen_pm::{prepare, Mesh, Simplifier, SimplifyOptions};
+use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
+use lodgen_pm::{prepare, Mesh, Schedule, Simplifier, SimplifyOptions};
 
 fn load_obj(path: &str) -> Mesh {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
@@ -89,7 +93,17 @@ fn main() {
     }
     let indices = m.indices();
     let n = m.triangles.len();
-    let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+    let schedule = match args.get(4).map(String::as_str) {
+        None => SimplifyOptions::DEFAULT.schedule,
+        Some("greedy") => Schedule::Greedy,
+        Some(f) => Schedule::Passes {
+            factor: f.parse().unwrap(),
+        },
+    };
+    let opts = SimplifyOptions::DEFAULT
+        .with_target_ratio(ratio)
+        .with_schedule(schedule);
+    let mut last = None;
     for run in 0..3 {
         reset_peak();
         let base = peak_kb();
@@ -129,6 +143,22 @@ fn main() {
             stats.collapses,
             stats.passes,
             stats.rejected.total(),
+        );
+        last = Some(pm.base);
+    }
+    if let Some(base) = last {
+        let r = measure(
+            MeshRef::new(&m.positions, &m.triangles),
+            MeshRef::new(&base.positions, &base.triangles),
+            &MeasureOptions::DEFAULT,
+        )
+        .unwrap();
+        println!(
+            "{:?}: {} triangles, Hausdorff {:.4} %, RMS {:.4} % of the diagonal",
+            schedule,
+            base.triangles.len(),
+            r.hausdorff_percent(),
+            r.rms_percent()
         );
     }
 }
