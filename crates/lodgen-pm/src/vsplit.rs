@@ -13,6 +13,7 @@
 //! from the simplifier's contraction log. No simplification logic here.
 
 use crate::mesh::Mesh;
+use rayon::prelude::*;
 use smallvec::SmallVec;
 
 /// A triangle corner: `triangles[triangle][slot]`.
@@ -253,54 +254,74 @@ impl ProgressiveMesh {
                 .map(|&t| map(&triangles[t as usize]))
                 .collect(),
         };
-        let mut split_wedges = Vec::with_capacity(if wedges.is_some() { records.len() } else { 0 });
-        let mut corners: Vec<(Corner, [u32; 2])> = Vec::new();
-        let splits = records
+        // the merged positions need the log in order; the rest of each
+        // split only reads shared maps, so splits are built in parallel
+        let p_merged: Vec<[f32; 3]> = records
             .iter()
             .rev()
             .map(|c| {
-                corners.clear();
-                let range = c.moved.start as usize..c.moved.end as usize;
-                corners.extend(log.moved(c).zip(range).map(|(k, i)| {
-                    let corner = Corner {
-                        triangle: tnew[k.triangle as usize],
-                        slot: k.slot,
-                    };
-                    // a split undoes the contraction: after ↔ before
-                    let w = if tracked {
-                        let w = log.wedges[i];
-                        [w[1], w[0]]
-                    } else {
-                        [0; 2]
-                    };
-                    (corner, w)
-                }));
-                corners.sort_unstable();
-                if let Some(w) = wedges {
-                    split_wedges.push(SplitWedges {
-                        faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
-                        corners: corners.iter().map(|c| c.1).collect(),
-                    });
-                }
-                let corners = corners.iter().map(|c| c.0).collect();
-                let p_merged = current[c.v1 as usize];
+                let p = current[c.v1 as usize];
                 current[c.v1 as usize] = c.p1;
-                VertexSplit {
-                    v1: vnew[c.v1 as usize],
-                    v0: vnew[c.v0 as usize],
-                    p1: c.p1,
-                    p_merged,
-                    p0: positions[c.v0 as usize],
-                    faces: c
-                        .removed
-                        .iter()
-                        .map(|&t| map(&triangles[t as usize]))
-                        .collect(),
-                    corners,
-                    error: c.error,
-                }
+                p
             })
             .collect();
+        drop(current);
+        let build = |corners: &mut Vec<(Corner, [u32; 2])>,
+                     (c, &p_merged): (&Contraction, &[f32; 3])|
+         -> (VertexSplit, Option<SplitWedges>) {
+            corners.clear();
+            let range = c.moved.start as usize..c.moved.end as usize;
+            corners.extend(log.moved(c).zip(range).map(|(k, i)| {
+                let corner = Corner {
+                    triangle: tnew[k.triangle as usize],
+                    slot: k.slot,
+                };
+                // a split undoes the contraction: after ↔ before
+                let w = if tracked {
+                    let w = log.wedges[i];
+                    [w[1], w[0]]
+                } else {
+                    [0; 2]
+                };
+                (corner, w)
+            }));
+            corners.sort_unstable();
+            let split_wedges = wedges.map(|w| SplitWedges {
+                faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
+                corners: corners.iter().map(|c| c.1).collect(),
+            });
+            let split = VertexSplit {
+                v1: vnew[c.v1 as usize],
+                v0: vnew[c.v0 as usize],
+                p1: c.p1,
+                p_merged,
+                p0: positions[c.v0 as usize],
+                faces: c
+                    .removed
+                    .iter()
+                    .map(|&t| map(&triangles[t as usize]))
+                    .collect(),
+                corners: corners.iter().map(|c| c.0).collect(),
+                error: c.error,
+            };
+            (split, split_wedges)
+        };
+        let items = records.par_iter().rev().zip(p_merged.par_iter());
+        let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if wedges.is_some() {
+            items
+                .map_init(Vec::new, |buf, item| {
+                    let (s, w) = build(buf, item);
+                    (s, w.unwrap_or_default())
+                })
+                .unzip()
+        } else {
+            (
+                items
+                    .map_init(Vec::new, |buf, item| build(buf, item).0)
+                    .collect(),
+                Vec::new(),
+            )
+        };
         let wedges = wedges.map(|w| WedgeLog {
             base: triangle_origin[..base_triangles]
                 .iter()
