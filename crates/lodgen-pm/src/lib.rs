@@ -21,6 +21,8 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
+pub mod attrfit;
+mod attrquadric;
 pub mod bvh;
 pub mod collapse;
 pub mod curvature;
@@ -109,24 +111,6 @@ pub fn simplify_with_wedges(
     }
     let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::new(&prepared.mesh, opts)?;
-    if dims > 0 {
-        // each welded vertex takes the values of its first input vertex
-        let nw = prepared.mesh.positions.len();
-        let mut values = vec![f32::NAN; dims * nw];
-        for (v, &w) in prepared.vertex_map.iter().enumerate() {
-            let w = w as usize;
-            if w < nw && values[dims * w].is_nan() {
-                values[dims * w..dims * (w + 1)]
-                    .copy_from_slice(&attributes[dims * v..dims * (v + 1)]);
-            }
-        }
-        for x in &mut values {
-            if !x.is_finite() {
-                *x = 0.0;
-            }
-        }
-        s.set_attributes(values, dims);
-    }
     let wedges = prepared
         .triangle_map
         .iter()
@@ -136,6 +120,14 @@ pub fn simplify_with_wedges(
         })
         .collect();
     s.set_wedges(wedges);
+    if dims > 0 {
+        // per wedge (the caller's vertex ids), non-finite values as 0
+        let values = attributes
+            .iter()
+            .map(|&x| if x.is_finite() { x } else { 0.0 })
+            .collect();
+        s.set_attributes(values, dims);
+    }
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {
