@@ -92,8 +92,10 @@ pub fn simplify(
 /// along itself (see [`features`]). The log carries every corner's wedge
 /// (`pm.wedges`, input vertex indices), so replay restores them exactly.
 ///
-/// `attributes` holds `dims` weighted values per input vertex (empty with
-/// `dims == 0`): they add the attribute term of [`features`] to the costs.
+/// `attributes` holds `dims` weighted values per input vertex, i.e. per
+/// wedge (empty with `dims == 0`): they add Hoppe 1999 attribute quadrics,
+/// one per wedge, to the costs (see ARCHITECTURE.md); non-finite values
+/// count as 0.
 /// Wrong lengths are a [`MeshError::AttributeCount`].
 pub fn simplify_with_wedges(
     positions: &[[f32; 3]],
