@@ -238,6 +238,9 @@ struct Prepared {
     colors: Option<Vec<[f32; 4]>>,
     joints: Option<Vec<[u16; 4]>>,
     weights: Option<Vec<[f32; 4]>>,
+    extra_colors: Vec<Vec<[f32; 4]>>,
+    extra_joints: Vec<Vec<[u16; 4]>>,
+    extra_weights: Vec<Vec<[f32; 4]>>,
     indices: Vec<u32>,
 }
 
@@ -390,6 +393,15 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
     if let Some(j) = &p.joints {
         check_len("JOINTS_0", j.len())?;
     }
+    for c in &p.extra_colors {
+        finite(&Some(c.clone()), "COLOR_n", &check_len)?;
+    }
+    for w in &p.extra_weights {
+        finite(&Some(w.clone()), "WEIGHTS_n", &check_len)?;
+    }
+    for j in &p.extra_joints {
+        check_len("JOINTS_n", j.len())?;
+    }
     if let Some(vertex) = p
         .positions
         .iter()
@@ -437,8 +449,22 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
         colors: p.colors.as_deref().map(|v| reorder(v, &order)),
         joints: p.joints.as_deref().map(|v| reorder(v, &order)),
         weights: p.weights.as_deref().map(|v| reorder(v, &order)),
+        extra_colors: p.extra_colors.iter().map(|v| reorder(v, &order)).collect(),
+        extra_joints: p.extra_joints.iter().map(|v| reorder(v, &order)).collect(),
+        extra_weights: p.extra_weights.iter().map(|v| reorder(v, &order)).collect(),
         indices,
     }))
+}
+
+/// Set 0 (when present) and sets 1, 2, … with their set numbers.
+fn sets<'a, T>(
+    first: &'a Option<Vec<T>>,
+    extra: &'a [Vec<T>],
+) -> impl Iterator<Item = (usize, &'a Vec<T>)> {
+    first
+        .iter()
+        .map(|v| (0, v))
+        .chain(extra.iter().enumerate().map(|(i, v)| (i + 1, v)))
 }
 
 fn normalized(v: [f32; 3]) -> Option<[f32; 3]> {
@@ -792,16 +818,13 @@ impl Builder {
             let name = format!("TEXCOORD_{}", i + 1);
             floats.push((name, f32_bytes(uv.iter().flatten()), 8, "VEC2"));
         }
-        if let Some(c) = &p.colors {
-            floats.push(("COLOR_0".into(), f32_bytes(c.iter().flatten()), 16, "VEC4"));
+        for (i, c) in sets(&p.colors, &p.extra_colors) {
+            let name = format!("COLOR_{i}");
+            floats.push((name, f32_bytes(c.iter().flatten()), 16, "VEC4"));
         }
-        if let Some(w) = &p.weights {
-            floats.push((
-                "WEIGHTS_0".into(),
-                f32_bytes(w.iter().flatten()),
-                16,
-                "VEC4",
-            ));
+        for (i, w) in sets(&p.weights, &p.extra_weights) {
+            let name = format!("WEIGHTS_{i}");
+            floats.push((name, f32_bytes(w.iter().flatten()), 16, "VEC4"));
         }
         for (name, bytes, stride, ty) in floats {
             let (view, b) = self.view(segment, Payload::Attribute { bytes, stride })?;
@@ -811,13 +834,13 @@ impl Builder {
             );
             attributes.insert(name, a.into());
         }
-        if let Some(j) = &p.joints {
+        for (i, j) in sets(&p.joints, &p.extra_joints) {
             let bytes: Vec<u8> = j.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
             let (view, b) = self.view(segment, Payload::Attribute { bytes, stride: 8 })?;
             total += b;
             let a = self.accessor(json!({"bufferView": view, "componentType": UNSIGNED_SHORT,
                                          "count": count, "type": "VEC4"}));
-            attributes.insert("JOINTS_0".into(), a.into());
+            attributes.insert(format!("JOINTS_{i}"), a.into());
         }
 
         // Indices: u16 when every index fits below the primitive-restart value.

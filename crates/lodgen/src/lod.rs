@@ -189,7 +189,16 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
     if let Some(a) = &p.weights {
         put(&a[v]);
     }
+    for a in &p.extra_colors {
+        put(&a[v]);
+    }
+    for a in &p.extra_weights {
+        put(&a[v]);
+    }
     if let Some(a) = &p.joints {
+        k.extend(a[v].map(u32::from));
+    }
+    for a in &p.extra_joints {
         k.extend(a[v].map(u32::from));
     }
     k
@@ -466,6 +475,8 @@ struct Channels {
     tangent: Option<usize>,
     extra_uv: Vec<usize>,
     color: Option<usize>,
+    /// `COLOR_1`, `COLOR_2`, …
+    extra_color: Vec<usize>,
     dims: usize,
 }
 
@@ -490,12 +501,20 @@ impl Channels {
             .unwrap_or(0);
         let extra_uv: Vec<usize> = (0..extra).filter_map(|_| take(true, 2)).collect();
         let color = take(any(&|p| p.colors.is_some()), 4);
+        let extra = mesh
+            .primitives
+            .iter()
+            .map(|p| p.extra_colors.len())
+            .max()
+            .unwrap_or(0);
+        let extra_color: Vec<usize> = (0..extra).filter_map(|_| take(true, 4)).collect();
         Channels {
             normal,
             uv,
             tangent,
             extra_uv,
             color,
+            extra_color,
             dims: c.dims,
         }
     }
@@ -515,6 +534,9 @@ impl Channels {
             put(Some(i), 2);
         }
         put(self.color, 4);
+        for &i in &self.extra_color {
+            put(Some(i), 4);
+        }
         out
     }
 
@@ -542,6 +564,9 @@ impl Channels {
         }
         if let Some(i) = self.color {
             o[i..i + 4].copy_from_slice(&p.colors.as_ref().map_or([1.0; 4], |a| a[v]));
+        }
+        for (k, &i) in self.extra_color.iter().enumerate() {
+            o[i..i + 4].copy_from_slice(&p.extra_colors.get(k).map_or([1.0; 4], |a| a[v]));
         }
         for x in o.iter_mut() {
             if !x.is_finite() {
@@ -582,9 +607,17 @@ impl Channels {
                 }
             }
         }
+        let rgba = |i: usize| [f[i], f[i + 1], f[i + 2], f[i + 3]].map(|x| x.clamp(0.0, 1.0));
         if let (Some(i), Some(c), true) = (self.color, to.colors.as_mut(), from.colors.is_some()) {
             if let Some(last) = c.last_mut() {
-                *last = [f[i], f[i + 1], f[i + 2], f[i + 3]].map(|x| x.clamp(0.0, 1.0));
+                *last = rgba(i);
+            }
+        }
+        for (k, &i) in self.extra_color.iter().enumerate() {
+            if from.extra_colors.get(k).is_some() {
+                if let Some(last) = to.extra_colors.get_mut(k).and_then(|a| a.last_mut()) {
+                    *last = rgba(i);
+                }
             }
         }
     }
@@ -688,6 +721,9 @@ fn extract(
             colors: p.colors.as_ref().map(|_| Vec::new()),
             joints: p.joints.as_ref().map(|_| Vec::new()),
             weights: p.weights.as_ref().map(|_| Vec::new()),
+            extra_colors: vec![Vec::new(); p.extra_colors.len()],
+            extra_joints: vec![Vec::new(); p.extra_joints.len()],
+            extra_weights: vec![Vec::new(); p.extra_weights.len()],
             ..Primitive::default()
         })
         .collect();
@@ -747,13 +783,31 @@ fn push_attributes(to: &mut Primitive, from: &Primitive, v: usize) {
     if let Some(c) = to.colors.as_mut() {
         c.push(from.colors.as_ref().map_or([1.0; 4], |a| a[v]));
     }
+    for (i, c) in to.extra_colors.iter_mut().enumerate() {
+        c.push(from.extra_colors.get(i).map_or([1.0; 4], |a| a[v]));
+    }
+    // JOINTS_n and WEIGHTS_n: all sets from the same source vertex, the
+    // weights of all sets together renormalised to sum 1
     if let Some(j) = to.joints.as_mut() {
         j.push(from.joints.as_ref().map_or([0; 4], |a| a[v]));
     }
+    for (i, j) in to.extra_joints.iter_mut().enumerate() {
+        j.push(from.extra_joints.get(i).map_or([0; 4], |a| a[v]));
+    }
+    let mut sets: Vec<[f32; 4]> = Vec::with_capacity(1 + to.extra_weights.len());
+    if to.weights.is_some() {
+        sets.push(from.weights.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |a| a[v]));
+    }
+    for i in 0..to.extra_weights.len() {
+        sets.push(from.extra_weights.get(i).map_or([0.0; 4], |a| a[v]));
+    }
+    normalize_weights(&mut sets);
+    let mut sets = sets.into_iter();
     if let Some(w) = to.weights.as_mut() {
-        w.push(normalize_weights(
-            from.weights.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |a| a[v]),
-        ));
+        w.extend(sets.next());
+    }
+    for w in to.extra_weights.iter_mut() {
+        w.extend(sets.next());
     }
 }
 
@@ -795,17 +849,24 @@ fn orthogonal_tangent(t: [f32; 4], normal: Option<[f32; 3]>) -> [f32; 4] {
     [x[0], x[1], x[2], if t[3] < 0.0 { -1.0 } else { 1.0 }]
 }
 
-/// Skin weights made non-negative and summing to 1 (all on the first joint
-/// when they sum to 0).
-fn normalize_weights(w: [f32; 4]) -> [f32; 4] {
-    let w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
-    let s: f32 = w.iter().sum();
+/// Skin weights of one vertex (every WEIGHTS_n set) made non-negative and
+/// summing to 1 over all sets (all on the first joint when they sum to 0).
+fn normalize_weights(sets: &mut [[f32; 4]]) {
+    for w in sets.iter_mut() {
+        *w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+    }
+    let s: f32 = sets.iter().flatten().sum();
     if (s - 1.0).abs() <= UNIT_EPS {
-        w
-    } else if s > 0.0 {
-        w.map(|x| x / s)
-    } else {
-        [1.0, 0.0, 0.0, 0.0]
+        return;
+    }
+    for (i, w) in sets.iter_mut().enumerate() {
+        *w = if s > 0.0 {
+            w.map(|x| x / s)
+        } else if i == 0 {
+            [1.0, 0.0, 0.0, 0.0]
+        } else {
+            [0.0; 4]
+        };
     }
 }
 

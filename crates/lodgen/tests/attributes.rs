@@ -166,13 +166,78 @@ fn spot_at_ten_percent_keeps_its_seams() {
     assert_eq!(spanning, 0, "triangles spanning two UV charts");
 }
 
+/// The skinned strip with a second influence set (JOINTS_1 / WEIGHTS_1,
+/// eight influences per vertex, the sum of both sets 1.25 × the first
+/// one's) and a second colour set.
+fn eight_influence_strip() -> SourceMesh {
+    let mut src = skinned_strip();
+    let p = &mut src.primitives[0];
+    let j0 = p.joints.clone().unwrap();
+    let w0 = p.weights.clone().unwrap();
+    p.extra_joints = vec![j0.iter().map(|j| [(j[0] + 2) % 6, 7, 8, 0]).collect()];
+    p.extra_weights = vec![w0
+        .iter()
+        .map(|w| {
+            let s: f32 = w.iter().sum();
+            [0.15 * s, 0.1 * s, 0.0, 0.0]
+        })
+        .collect()];
+    p.extra_colors = vec![p
+        .positions
+        .iter()
+        .map(|q| [q[0] / 6.0, q[1], 0.5, 1.0])
+        .collect()];
+    src
+}
+
+#[test]
+fn every_set_of_joints_weights_and_colours_stays_valid() {
+    let src = eight_influence_strip();
+    let input = &src.primitives[0];
+    let eight = |p: &Primitive, v: usize| {
+        let mut j = p.joints.as_ref().unwrap()[v].to_vec();
+        j.extend(p.extra_joints[0][v]);
+        j
+    };
+    let tuples: BTreeSet<Vec<u16>> = (0..input.positions.len())
+        .map(|v| eight(input, v))
+        .collect();
+    let lod = build(&src, &[0.5, 0.1, 0.02]);
+    assert_eq!(lod.levels.len(), 3);
+    for (l, level) in lod.levels.iter().enumerate() {
+        let p = &level.primitives[0];
+        let n = p.positions.len();
+        assert_eq!(p.extra_joints.len(), 1);
+        assert_eq!(p.extra_weights.len(), 1);
+        assert_eq!(p.extra_colors.len(), 1);
+        assert_eq!(p.extra_joints[0].len(), n);
+        assert_eq!(p.extra_weights[0].len(), n);
+        assert_eq!(p.extra_colors[0].len(), n);
+        for v in 0..n {
+            let (w0, w1) = (p.weights.as_ref().unwrap()[v], p.extra_weights[0][v]);
+            let sum: f32 = w0.iter().chain(&w1).sum();
+            assert!(
+                (sum - 1.0).abs() < 1e-5,
+                "level {l} vertex {v}: weights of both sets sum to {sum}"
+            );
+            assert!(w1[0] > 0.0, "level {l} vertex {v}: second set lost");
+            // all eight joints from one source vertex
+            assert!(tuples.contains(&eight(p, v)), "level {l} vertex {v}");
+            let c = p.extra_colors[0][v];
+            assert!(c.iter().all(|x| (0.0..=1.0).contains(x)), "{c:?}");
+        }
+    }
+}
+
 #[test]
 fn every_vertex_attribute_round_trips_through_gltf() {
-    let mut p = skinned_strip().primitives.remove(0);
+    let mut p = eight_influence_strip().primitives.remove(0);
     let n = p.positions.len();
-    for w in p.weights.as_mut().unwrap() {
-        let s: f32 = w.iter().sum();
-        *w = w.map(|x| x / s);
+    for v in 0..n {
+        let w = p.weights.as_mut().unwrap();
+        let s: f32 = w[v].iter().chain(&p.extra_weights[0][v]).sum();
+        w[v] = w[v].map(|x| x / s);
+        p.extra_weights[0][v] = p.extra_weights[0][v].map(|x| x / s);
     }
     p.normals = Some(vec![[0.0, 0.0, 1.0]; n]);
     p.texcoords = Some((0..n).map(|i| [i as f32 / n as f32, 0.25]).collect());
@@ -215,11 +280,17 @@ fn every_vertex_attribute_round_trips_through_gltf() {
         k.extend(p.colors.as_ref().unwrap()[v].map(f32::to_bits));
         k.extend(p.joints.as_ref().unwrap()[v].map(u32::from));
         k.extend(p.weights.as_ref().unwrap()[v].map(f32::to_bits));
+        k.extend(p.extra_colors[0][v].map(f32::to_bits));
+        k.extend(p.extra_joints[0][v].map(u32::from));
+        k.extend(p.extra_weights[0][v].map(f32::to_bits));
         k
     };
     let a: BTreeSet<Vec<u32>> = (0..n).map(|v| key(&p, v)).collect();
     let b: BTreeSet<Vec<u32>> = (0..q.positions.len()).map(|v| key(q, v)).collect();
     assert_eq!(q.extra_texcoords.len(), 1);
+    assert_eq!(q.extra_colors.len(), 1);
+    assert_eq!(q.extra_joints.len(), 1);
+    assert_eq!(q.extra_weights.len(), 1);
     assert_eq!(a, b);
 }
 
