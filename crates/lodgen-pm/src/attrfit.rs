@@ -96,8 +96,10 @@ const RULE: [([f64; 3], f64); 4] = [
     ([1.0 / 6.0, 1.0 / 6.0, 4.0 / 6.0], 0.25),
 ];
 /// Queries per unit of parallel work (fixed, so results do not depend on
-/// the thread count).
+/// the thread count), and units per batch (bounds the memory of results
+/// waiting to be summed).
 const CHUNK: usize = 4096;
+const BATCH: usize = 64;
 
 /// Fit the level's wedge values to the source surface (module docs).
 /// Degenerate inputs (no triangles, indices out of range, non-finite
@@ -161,36 +163,62 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
     let chart = charts(wedge_count, src.triangles);
     let level_chart: Vec<u32> = level.wedges.iter().map(|w| chart[w[0] as usize]).collect();
 
-    // Samples → (level triangle, barycentrics), in parallel, in order.
-    let samples: Vec<(u32, usize)> = (0..src.triangles.len() as u32)
-        .flat_map(|t| (0..RULE.len()).map(move |r| (t, r)))
-        .collect();
+    // Samples → (level triangle, barycentrics), in parallel batches, then
+    // summed in sample order into each level triangle's 3×3 block
+    // `Σ ω γ_i γ_j` and its right-hand sides `Σ ω γ_i a_d(p)`: memory
+    // bounded by the level, not by the sample count.
     let p3 = |ps: &[[f32; 3]], v: u32| ps[v as usize].map(f64::from);
-    let hits: Vec<Option<(u32, [f64; 3])>> = samples
-        .par_chunks(CHUNK)
-        .flat_map_iter(|chunk| {
-            chunk.iter().map(|&(t, r)| {
-                let tri = src.triangles[t as usize];
-                let [a, b, c] = tri.map(|v| p3(src.positions, v));
-                let g = RULE[r].0;
-                let p = [0, 1, 2].map(|k| g[0] * a[k] + g[1] * b[k] + g[2] * c[k]);
-                let (_, lt, q) = bvh.closest_point(p)?;
-                if level_chart[lt as usize] != chart[tri[0] as usize] {
-                    return None;
-                }
-                let lp = level.triangles[lt as usize].map(|v| p3(level.positions, v));
-                Some((lt, barycentric(lp, q)))
+    let nl = level.triangles.len();
+    let mut block = vec![0.0f64; 9 * nl];
+    let mut rhs0 = vec![0.0f64; 3 * dims * nl];
+    let total = src.triangles.len() * RULE.len();
+    let mut start = 0;
+    while start < total {
+        let end = (start + BATCH * CHUNK).min(total);
+        let hits: Vec<Option<(u32, [f64; 3])>> = (start..end)
+            .collect::<Vec<usize>>()
+            .par_chunks(CHUNK)
+            .flat_map_iter(|chunk| {
+                chunk.iter().map(|&i| {
+                    let tri = src.triangles[i / RULE.len()];
+                    let [a, b, c] = tri.map(|v| p3(src.positions, v));
+                    let g = RULE[i % RULE.len()].0;
+                    let p = [0, 1, 2].map(|k| g[0] * a[k] + g[1] * b[k] + g[2] * c[k]);
+                    let (_, lt, q) = bvh.closest_point(p)?;
+                    if level_chart[lt as usize] != chart[tri[0] as usize] {
+                        return None;
+                    }
+                    let lp = level.triangles[lt as usize].map(|v| p3(level.positions, v));
+                    Some((lt, barycentric(lp, q)))
+                })
             })
-        })
-        .collect();
-    let areas: Vec<f64> = src
-        .triangles
-        .iter()
-        .map(|tri| {
+            .collect();
+        for (i, hit) in (start..end).zip(hits) {
+            let Some((lt, g)) = hit else { continue };
+            let tri = src.triangles[i / RULE.len()];
             let [a, b, c] = tri.map(|v| p3(src.positions, v));
-            0.5 * norm(cross(sub(b, a), sub(c, a)))
-        })
-        .collect();
+            let (beta, weight) = RULE[i % RULE.len()];
+            let omega = 0.5 * norm(cross(sub(b, a), sub(c, a))) * weight;
+            if omega == 0.0 || !omega.is_finite() {
+                continue;
+            }
+            let lt = lt as usize;
+            for i in 0..3 {
+                for j in 0..3 {
+                    block[9 * lt + 3 * i + j] += omega * g[i] * g[j];
+                }
+            }
+            for d in 0..dims {
+                let value: f64 = (0..3)
+                    .map(|k| beta[k] * f64::from(src.values[tri[k] as usize * dims + d]))
+                    .sum();
+                for i in 0..3 {
+                    rhs0[(3 * lt + i) * dims + d] += omega * g[i] * value;
+                }
+            }
+        }
+        start = end;
+    }
 
     let mut x = x0.clone();
     for range in channels {
@@ -225,42 +253,31 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
                 rep[u as usize] = i;
             }
         }
-        // Normal matrix (CSR, summed in sample order) and right-hand sides;
-        // fixed corners go to the right-hand side.
-        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * hits.len());
+        // Normal matrix (CSR) and right-hand sides from the blocks, in
+        // level-triangle order; fixed corners go to the right-hand side.
+        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * nl);
         let mut rhs = vec![0.0; m * width];
-        for (&(t, r), hit) in samples.iter().zip(&hits) {
-            let Some((lt, g)) = *hit else { continue };
-            let tri = src.triangles[t as usize];
-            let (beta, weight) = RULE[r];
-            let omega = areas[t as usize] * weight;
-            if omega == 0.0 || !omega.is_finite() {
-                continue;
-            }
-            let ks = corner_keys[lt as usize];
-            for c in 0..width {
-                let d = range.start + c;
-                let mut value: f64 = (0..3)
-                    .map(|k| beta[k] * f64::from(src.values[tri[k] as usize * dims + d]))
-                    .sum();
-                for k in 0..3 {
-                    if unk[ks[k] as usize] == u32::MAX {
-                        value -= g[k] * x0[ks[k] as usize * dims + d];
-                    }
-                }
-                for i in 0..3 {
-                    let ui = unk[ks[i] as usize];
-                    if ui != u32::MAX {
-                        rhs[ui as usize * width + c] += omega * g[i] * value;
-                    }
-                }
-            }
+        for (lt, ks) in corner_keys.iter().enumerate() {
+            let bl = &block[9 * lt..9 * lt + 9];
             for i in 0..3 {
                 let ui = unk[ks[i] as usize];
+                if ui == u32::MAX {
+                    continue;
+                }
+                for c in 0..width {
+                    let d = range.start + c;
+                    let mut r = rhs0[(3 * lt + i) * dims + d];
+                    for k in 0..3 {
+                        if unk[ks[k] as usize] == u32::MAX {
+                            r -= bl[3 * i + k] * x0[ks[k] as usize * dims + d];
+                        }
+                    }
+                    rhs[ui as usize * width + c] += r;
+                }
                 for j in 0..3 {
                     let uj = unk[ks[j] as usize];
-                    if ui != u32::MAX && uj != u32::MAX {
-                        triplets.push((ui, uj, omega * g[i] * g[j]));
+                    if uj != u32::MAX && bl[3 * i + j] != 0.0 {
+                        triplets.push((ui, uj, bl[3 * i + j]));
                     }
                 }
             }
