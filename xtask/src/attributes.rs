@@ -60,6 +60,10 @@ pub fn run(args: &[String]) -> Result<()> {
         original.triangles.len()
     );
     println!(
+        "lodgen attribute weights: normal {}, uv {}; meshopt weights {MESHOPT_WEIGHTS:?} (normal xyz, uv)",
+        weights.normal, weights.uv
+    );
+    println!(
         "{:>6} {:>8} {:>7} {:>15} {:>15} {:>17}",
         "level", "tool", "tris", "uv mean/rms", "normal° mean/rms", "geom H/rms %"
     );

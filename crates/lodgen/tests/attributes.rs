@@ -7,7 +7,7 @@ use lodgen::io::read_scene;
 use lodgen::lod::{build_one, BuildOptions, LevelRequest};
 use lodgen::scene::{LodLevel, LodMesh, Origin, Primitive, Scene, SourceMesh};
 use lodgen_pm::levels::LevelSpec;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 fn build(mesh: &SourceMesh, ratios: &[f64]) -> LodMesh {
     let opts = BuildOptions {
@@ -430,4 +430,138 @@ fn full_refinement_keeps_the_input_attributes_exactly() {
     let a: BTreeSet<Vec<u32>> = (0..input.positions.len()).map(|v| key(input, v)).collect();
     let b: BTreeSet<Vec<u32>> = (0..full.positions.len()).map(|v| key(full, v)).collect();
     assert_eq!(a, b);
+}
+
+/// A 6×6-per-face cube with hard normals: every face its own vertices,
+/// all with the face's normal, and UVs = the face's own 2D coordinates.
+fn hard_cube() -> SourceMesh {
+    let n = 6;
+    let cube = lodgen_pm::shapes::cube([-1.0; 3], [1.0; 3], n);
+    let per_face = (2 * n * n) as usize;
+    let mut p = Primitive::default();
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    for (f, tris) in cube.triangles.chunks(per_face).enumerate() {
+        let q = tris[0].map(|v| cube.positions[v as usize]);
+        let axis = (0..3)
+            .find(|&a| q[0][a] == q[1][a] && q[1][a] == q[2][a])
+            .unwrap();
+        let mut normal = [0.0; 3];
+        normal[axis] = q[0][axis].signum();
+        let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut local = BTreeMap::new();
+        for t in tris {
+            for &v in t {
+                let id = *local.entry(v).or_insert_with(|| {
+                    let x = cube.positions[v as usize];
+                    p.positions.push(x);
+                    normals.push(normal);
+                    uvs.push([0.5 + 0.5 * x[u], (f as f32 + 0.5 + 0.5 * x[w]) / 6.0]);
+                    p.positions.len() as u32 - 1
+                });
+                p.indices.push(id);
+            }
+        }
+    }
+    p.normals = Some(normals);
+    p.texcoords = Some(uvs);
+    SourceMesh {
+        name: "cube".into(),
+        primitives: vec![p],
+    }
+}
+
+#[test]
+fn cube_with_hard_normals_stays_flat_shaded_with_exact_normals() {
+    let src = hard_cube();
+    let lod = build(&src, &[0.5, 0.1, 0.02]);
+    for (l, level) in lod.levels.iter().enumerate() {
+        let p = &level.primitives[0];
+        let normals = p.normals.as_ref().unwrap();
+        let mut faces = BTreeSet::new();
+        for t in p.indices.chunks_exact(3) {
+            let c = [0, 1, 2].map(|k| t[k] as usize);
+            // every corner has the face's own axis normal, bit for bit
+            let n = normals[c[0]];
+            assert!(
+                c.iter().all(|&v| normals[v] == n),
+                "level {l}: corners of one triangle differ: {:?}",
+                c.map(|v| normals[v])
+            );
+            let axis = (0..3).find(|&a| n[a] != 0.0).unwrap();
+            assert_eq!(n[axis].abs(), 1.0, "level {l}: normal {n:?}");
+            assert!(c.iter().all(|&v| p.positions[v][axis] == n[axis]));
+            faces.insert(n.map(f32::to_bits));
+        }
+        assert_eq!(faces.len(), 6, "level {l}: six flat faces");
+    }
+    // the coarsest level: two triangles per face
+    assert_eq!(lod.levels[2].triangle_count(), 12);
+}
+
+/// A 16×16 grid with a UV seam along x = 0.5: the right half's UVs are
+/// shifted by 2 (another chart).
+fn seamed_textured_grid() -> SourceMesh {
+    let g = lodgen_pm::shapes::grid(16, 16, |x, y| 0.05 * (3.0 * x).sin() * (2.0 * y).cos());
+    let mut p = Primitive::default();
+    let mut uvs = Vec::new();
+    let mut ids = BTreeMap::new();
+    for t in &g.triangles {
+        let right = t.iter().map(|&v| g.positions[v as usize][0]).sum::<f32>() > 1.5;
+        for &v in t {
+            let id = *ids.entry((right, v)).or_insert_with(|| {
+                let x = g.positions[v as usize];
+                p.positions.push(x);
+                uvs.push([x[0] + if right { 2.0 } else { 0.0 }, x[1]]);
+                p.positions.len() as u32 - 1
+            });
+            p.indices.push(id);
+        }
+    }
+    p.texcoords = Some(uvs);
+    SourceMesh {
+        name: "seamed".into(),
+        primitives: vec![p],
+    }
+}
+
+#[test]
+fn textured_grid_keeps_its_uv_seam_at_every_level() {
+    let src = seamed_textured_grid();
+    let input_uv: BTreeSet<[u32; 2]> = src.primitives[0]
+        .texcoords
+        .as_ref()
+        .unwrap()
+        .iter()
+        .map(|t| t.map(f32::to_bits))
+        .collect();
+    let lod = build(&src, &[0.5, 0.25, 0.1, 0.05]);
+    for (l, level) in lod.levels.iter().enumerate() {
+        let p = &level.primitives[0];
+        let uv = p.texcoords.as_ref().unwrap();
+        for t in p.indices.chunks_exact(3) {
+            let c = [0, 1, 2].map(|k| t[k] as usize);
+            // one chart per triangle: all corners left (u < 1.5) or right
+            let right = c.map(|v| uv[v][0] > 1.5);
+            assert!(
+                right.iter().all(|&r| r == right[0]),
+                "level {l}: spans the seam"
+            );
+            for v in c {
+                let x = p.positions[v];
+                // geometry on its side of the seam line
+                assert!(
+                    if right[0] { x[0] >= 0.5 } else { x[0] <= 0.5 },
+                    "level {l}"
+                );
+                // seam vertices keep their input UVs exactly on both sides
+                if x[0] == 0.5 {
+                    assert!(
+                        input_uv.contains(&uv[v].map(f32::to_bits)),
+                        "level {l}: {:?}",
+                        uv[v]
+                    );
+                }
+            }
+        }
+    }
 }
