@@ -17,11 +17,15 @@
 //! positions for topology and treats every edge across which wedges differ
 //! — UV seams, hard normals, colour or skin discontinuities, material
 //! borders — as a feature edge that collapses only along itself
-//! (`lodgen_pm::features`). The log tracks each corner's wedge, and a level's
-//! corner takes the attributes of its wedge: values are those of a source
-//! vertex of the same chart (half-edge for attributes, so JOINTS come from
-//! that source vertex and are never interpolated), normals renormalised,
-//! tangents re-orthogonalised against them, WEIGHTS renormalised to sum 1.
+//! (`lodgen_pm::features`); the cost adds attribute quadrics per wedge
+//! (`AttributeWeights`). The log tracks each corner's wedge, and a level's
+//! corner starts from the attributes of its wedge (a source vertex of the
+//! same chart): JOINTS / WEIGHTS of every set stay those of that one vertex
+//! (never interpolated, weights renormalised to sum 1 over all sets), while
+//! normals, UVs, tangents and colours of every level below the input are
+//! fitted to the input surface (`lodgen_pm::attrfit`: least squares, chart
+//! by chart, seams keep their input values), then normals renormalised,
+//! tangents re-orthogonalised against them, colours clamped to [0, 1].
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::levels::{self, LevelSpec};
