@@ -136,3 +136,38 @@ fn a_seam_keeps_its_input_values_where_the_sides_differ() {
         out.get(1, sv(4, 1) + n).unwrap()[1].to_bits()
     );
 }
+
+#[test]
+fn samples_never_cross_into_another_chart() {
+    // chart A: the unit square at z = 0, value 0; chart B: a smaller square
+    // 0.01 above its middle, value 100. In the level, A has moved up to
+    // z = 0.02 (as a coarse level may), so A's samples under B are nearer
+    // to B's level triangles than to A's: they must not count for B.
+    let square = |lo: f32, hi: f32, z: f32| [[lo, lo, z], [hi, lo, z], [hi, hi, z], [lo, hi, z]];
+    let mut pos = square(0.0, 1.0, 0.0).to_vec();
+    pos.extend(square(0.25, 0.75, 0.01));
+    let quad = |o: u32| [[o, o + 1, o + 2], [o, o + 2, o + 3]];
+    let mut tris = quad(0).to_vec();
+    tris.extend(quad(4));
+    let values = [0.0, 0.0, 0.0, 0.0, 100.0, 100.0, 100.0, 100.0];
+    let mut lpos = square(0.0, 1.0, 0.02).to_vec();
+    lpos.extend(square(0.25, 0.75, 0.01));
+    let out = fit(
+        Source {
+            positions: &pos,
+            triangles: &tris,
+            values: &values,
+            dims: 1,
+        },
+        Level {
+            positions: &lpos,
+            triangles: &tris,
+            wedges: &tris,
+        },
+        std::slice::from_ref(&(0..1)),
+    );
+    for v in 4..8 {
+        let got = out.get(v, v).unwrap()[0];
+        assert!((got - 100.0).abs() < 1e-3, "vertex {v}: {got}");
+    }
+}
