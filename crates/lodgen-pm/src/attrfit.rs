@@ -62,6 +62,17 @@ pub struct Level<'a> {
     pub wedges: &'a [[u32; 3]],
 }
 
+/// A group of components fitted as one unit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub components: Range<usize>,
+    /// Keep each fitted component within the input values it was fitted to
+    /// (and its own input value): no extrapolation, so a UV stays within
+    /// what its chart shows around it. Off for unit vectors (normals,
+    /// tangents), which are renormalised instead.
+    pub bounded: bool,
+}
+
 /// Fitted values: `keys` (level vertex, wedge), sorted, and `dims` values
 /// for each.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -104,10 +115,10 @@ const BATCH: usize = 64;
 /// Fit the level's wedge values to the source surface (module docs).
 /// Degenerate inputs (no triangles, indices out of range, non-finite
 /// positions) give the input values unchanged.
-/// `channels` are the component ranges fitted as units (a normal's three
+/// `channels` are the component groups fitted as units (a normal's three
 /// components, a UV pair): at a level vertex whose wedges disagree on a
 /// channel (a seam of it), that channel keeps its input values.
-pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitted {
+pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
     let dims = src.dims;
     // Unknowns: distinct (level vertex, wedge) pairs.
     let mut keys: Vec<(u32, u32)> = level
@@ -171,6 +182,8 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
     let nl = level.triangles.len();
     let mut block = vec![0.0f64; 9 * nl];
     let mut rhs0 = vec![0.0f64; 3 * dims * nl];
+    // the range of the input values that landed on each level triangle
+    let mut seen = vec![[f64::INFINITY, f64::NEG_INFINITY]; dims * nl];
     let total = src.triangles.len() * RULE.len();
     let mut start = 0;
     while start < total {
@@ -215,13 +228,16 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
                 for i in 0..3 {
                     rhs0[(3 * lt + i) * dims + d] += omega * g[i] * value;
                 }
+                let r = &mut seen[lt * dims + d];
+                *r = [r[0].min(value), r[1].max(value)];
             }
         }
         start = end;
     }
 
     let mut x = x0.clone();
-    for range in channels {
+    for channel in channels {
+        let range = &channel.components;
         let range = range.start.min(dims)..range.end.min(dims);
         if range.is_empty() {
             continue;
@@ -321,6 +337,23 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
             }
         };
         let precondition = diag_plus(&diag, &reg);
+        // each unknown's bounds: what the input shows on its triangles
+        let mut bounds = vec![[f64::INFINITY, f64::NEG_INFINITY]; m * width];
+        for (lt, ks) in corner_keys.iter().enumerate() {
+            for &k in ks {
+                let u = unk[k as usize];
+                if u == u32::MAX {
+                    continue;
+                }
+                for c in 0..width {
+                    let (r, b) = (
+                        seen[lt * dims + range.start + c],
+                        &mut bounds[u as usize * width + c],
+                    );
+                    *b = [b[0].min(r[0]), b[1].max(r[1])];
+                }
+            }
+        }
         for c in 0..width {
             let d = range.start + c;
             let start: Vec<f64> = rep.iter().map(|&i| x0[i * dims + d]).collect();
@@ -331,7 +364,13 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Range<usize>]) -> Fitt
             conjugate_gradients(&apply, &b, &precondition, &mut y);
             for (i, &u) in unk.iter().enumerate() {
                 if u != u32::MAX && y[u as usize].is_finite() {
-                    x[i * dims + d] = y[u as usize];
+                    x[i * dims + d] = if channel.bounded {
+                        let [lo, hi] = bounds[u as usize * width + c];
+                        let own = x0[i * dims + d];
+                        y[u as usize].clamp(lo.min(own), hi.max(own))
+                    } else {
+                        y[u as usize]
+                    };
                 }
             }
         }

@@ -2,7 +2,18 @@
 //! the input's attribute field at the level's own positions, and seams keep
 //! their input values.
 
-use lodgen_pm::attrfit::{fit, Level, Source};
+use lodgen_pm::attrfit::{fit, Channel, Level, Source};
+
+/// One channel per component range, bounded.
+fn channels(ranges: &[std::ops::Range<usize>]) -> Vec<Channel> {
+    ranges
+        .iter()
+        .map(|r| Channel {
+            components: r.clone(),
+            bounded: true,
+        })
+        .collect()
+}
 use lodgen_pm::shapes;
 
 /// A flat 8×8 grid on [0, 1]², z = 0.
@@ -48,7 +59,7 @@ fn a_linear_field_is_reproduced_at_moved_vertices() {
             triangles: &ltris,
             wedges: &lwedges,
         },
-        std::slice::from_ref(&(0..1)),
+        &channels(std::slice::from_ref(&(0..1))),
     );
     for (v, &p) in lpos.iter().enumerate() {
         let got = out.get(v as u32, corner_wedge[v]).unwrap()[0];
@@ -120,7 +131,7 @@ fn a_seam_keeps_its_input_values_where_the_sides_differ() {
             triangles: &ltris,
             wedges: &lwedges,
         },
-        &[0..1, 1..2],
+        &channels(&[0..1, 1..2]),
     );
     for w in [sv(4, 1), sv(4, 1) + n] {
         let got = out.get(1, w).unwrap();
@@ -164,10 +175,65 @@ fn samples_never_cross_into_another_chart() {
             triangles: &tris,
             wedges: &tris,
         },
-        std::slice::from_ref(&(0..1)),
+        &channels(std::slice::from_ref(&(0..1))),
     );
     for v in 4..8 {
         let got = out.get(v, v).unwrap()[0];
         assert!((got - 100.0).abs() < 1e-3, "vertex {v}: {got}");
+    }
+}
+
+#[test]
+fn bounded_channels_never_extrapolate() {
+    // a step from 0 to 1 across x = 0.5, fitted by one linear ramp over the
+    // square: least squares overshoots to about −0.25 and 1.25 at the ends
+    let (pos, tris) = source_grid();
+    let values: Vec<f32> = pos
+        .iter()
+        .map(|p| if p[0] >= 0.5 { 1.0 } else { 0.0 })
+        .collect();
+    let lpos = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let ltris: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
+    let corner_wedge = [sv(0, 0), sv(8, 0), sv(8, 8), sv(0, 8)];
+    let lwedges: Vec<[u32; 3]> = ltris
+        .iter()
+        .map(|t| t.map(|v| corner_wedge[v as usize]))
+        .collect();
+    let run = |bounded: bool| {
+        fit(
+            Source {
+                positions: &pos,
+                triangles: &tris,
+                values: &values,
+                dims: 1,
+            },
+            Level {
+                positions: &lpos,
+                triangles: &ltris,
+                wedges: &lwedges,
+            },
+            &[Channel {
+                components: 0..1,
+                bounded,
+            }],
+        )
+    };
+    let (free, bounded) = (run(false), run(true));
+    let at =
+        |f: &lodgen_pm::attrfit::Fitted, v: usize| f.get(v as u32, corner_wedge[v]).unwrap()[0];
+    assert!(
+        at(&free, 0) < -0.1 && at(&free, 1) > 1.1,
+        "{} {}",
+        at(&free, 0),
+        at(&free, 1)
+    );
+    for v in 0..4 {
+        let x = at(&bounded, v);
+        assert!((0.0..=1.0).contains(&x), "vertex {v}: {x}");
     }
 }

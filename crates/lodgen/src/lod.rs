@@ -28,6 +28,7 @@
 //! tangents re-orthogonalised against them, colours clamped to [0, 1].
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
+use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
 use lodgen_pm::measure::{self, ErrorReport, MeasureOptions, MeshRef};
 use lodgen_pm::{
@@ -524,22 +525,26 @@ impl Channels {
     }
 
     /// The component range of every channel.
-    fn ranges(&self) -> Vec<std::ops::Range<usize>> {
-        let mut out: Vec<std::ops::Range<usize>> = Vec::new();
-        let mut put = |start: Option<usize>, n: usize| {
+    fn ranges(&self) -> Vec<Channel> {
+        let mut out = Vec::new();
+        let mut put = |start: Option<usize>, n: usize, bounded: bool| {
             if let Some(i) = start {
-                out.push(i..i + n);
+                out.push(Channel {
+                    components: i..i + n,
+                    bounded,
+                });
             }
         };
-        put(self.normal, 3);
-        put(self.uv, 2);
-        put(self.tangent, 3);
+        // unit vectors are renormalised; UVs and colours never extrapolate
+        put(self.normal, 3, false);
+        put(self.uv, 2, true);
+        put(self.tangent, 3, false);
         for &i in &self.extra_uv {
-            put(Some(i), 2);
+            put(Some(i), 2, true);
         }
-        put(self.color, 4);
+        put(self.color, 4, true);
         for &i in &self.extra_color {
-            put(Some(i), 4);
+            put(Some(i), 4, true);
         }
         out
     }
