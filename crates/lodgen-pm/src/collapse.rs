@@ -499,39 +499,29 @@ impl Simplifier {
         self.rebuild_heap();
     }
 
-    /// Add an attribute term to every pair's heap key: `values` holds
-    /// `dims` attribute components per vertex (in the mesh's numbering),
-    /// already multiplied by their weights; see `features` for the cost.
-    /// Errors recorded in the log stay geometric. Call before the first
-    /// `step`. Panics if the length is not `dims ×` the vertex count (a
-    /// programming error, not input).
+    /// Add an attribute term to every pair's heap key: Hoppe 1999
+    /// attribute quadrics (`attrquadric`). `values` holds `dims` weighted
+    /// components per wedge id when wedges are tracked (call `set_wedges`
+    /// first), else per vertex. Errors recorded in the log stay geometric.
+    /// Call before the first `step`. Panics if a wedge (vertex) has no
+    /// values (a programming error, not input).
     pub fn set_attributes(&mut self, values: Vec<f32>, dims: usize) {
-        assert_eq!(
-            values.len(),
-            dims * self.pos.len(),
-            "dims values per vertex"
-        );
-        let mut area = vec![0.0; self.pos.len()];
-        for (t, tri) in self.tris.iter().enumerate() {
-            if self.tri_alive[t] {
-                let [p0, p1, p2] = tri.map(|v| dv(self.pos[v as usize]));
-                let a = (p1 - p0).cross(p2 - p0).length() / 6.0;
-                for &v in tri {
-                    area[v as usize] += a;
-                }
-            }
-        }
+        let wedges = self.features.as_ref().and_then(|f| f.wedges.as_deref());
         let diagonal = Mesh {
             positions: self.pos.clone(),
             triangles: Vec::new(),
         }
         .diagonal();
-        self.attributes = Some(AttributeCost {
+        let cost = AttributeCost::new(
+            &values,
             dims,
-            values,
-            area,
-            scale: diagonal * diagonal,
-        });
+            &self.pos,
+            &self.tris,
+            &self.tri_alive,
+            wedges,
+            diagonal * diagonal,
+        );
+        self.attributes = Some(cost.expect("dims values per wedge"));
         self.rebuild_heap();
     }
 
@@ -617,11 +607,14 @@ impl Simplifier {
         if let Some(at) = &self.attributes {
             // the farther endpoint is the one removed (as in `step`)
             let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
-            cost += if (p - pa).length_squared() <= (p - pb).length_squared() {
-                at.cost(b, a)
+            let (v0, v1) = if (p - pa).length_squared() <= (p - pb).length_squared() {
+                (b, a)
             } else {
-                at.cost(a, b)
+                (a, b)
             };
+            let w = self.features.as_ref().and_then(|f| f.wedges.as_deref());
+            let fan0 = self.vtris.fan(v0);
+            cost += at.cost(v0, v1, p, &self.tris, fan0, &self.tri_alive, w);
         }
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
@@ -1003,7 +996,9 @@ impl Simplifier {
             f.contract(v0, v1);
         }
         if let Some(at) = &mut self.attributes {
-            at.area[i1] += at.area[i0];
+            let w = self.features.as_ref().and_then(|f| f.wedges.as_deref());
+            let e = edits.as_ref().map_or(&[][..], |e| &e.0[..]);
+            at.contract(v0, v1, &record.removed, e, &self.tris, w);
         }
         if !self.partners(v0).is_empty() || !self.partners(v1).is_empty() {
             let mut p = std::mem::take(&mut self.partners[i0]);

@@ -28,21 +28,14 @@
 //! old and new wedge of each moved corner go into the log, so a replay
 //! restores every corner's wedge exactly.
 //!
-//! Attribute error (a simplified Hoppe 1999 / meshoptimizer attribute
-//! metric): a contraction that removes `v0` replaces the attributes of
-//! `v0`'s fan with those of `v1`'s wedges, so it costs
-//! `area(fan of v0) · |a(v0) − a(v1)|²` with attributes pre-multiplied by
-//! the caller's weights, and scaled by the squared bounding-box diagonal so
-//! that an attribute difference of 1 at weight 1 weighs like a displacement
-//! of the whole mesh's size (meshoptimizer's convention, which works in a
-//! unit cube). Attribute values are those of one representative wedge per
-//! vertex; new values are never interpolated (the wedge of `v1` is kept),
-//! which is what the cost measures.
+//! Attribute error: Hoppe 1999 attribute quadrics per wedge, in
+//! `attrquadric` (re-exported here as [`AttributeCost`]).
 //!
-//! Owns [`Features`], [`Kind`] and [`AttributeCost`]. The contraction rules
+//! Owns [`Features`] and [`Kind`]. The contraction rules
 //! that consult them are in `collapse` (`target_of`, `check`, `contract`,
 //! `entry`).
 
+pub(crate) use crate::attrquadric::AttributeCost;
 use crate::collapse::Rejected;
 use smallvec::SmallVec;
 
@@ -265,33 +258,4 @@ fn edge_uses(tris: &[[u32; 3]]) -> Vec<(u32, u32, u32)> {
         }
     }
     half
-}
-
-/// Per-vertex attributes for the attribute term of the cost (module docs).
-#[derive(Clone, Debug)]
-pub(crate) struct AttributeCost {
-    /// Components per vertex.
-    pub dims: usize,
-    /// `dims` weighted values per vertex.
-    pub values: Vec<f32>,
-    /// Area of the triangles around each vertex (a third of each), grown
-    /// by contractions.
-    pub area: Vec<f64>,
-    /// Squared bounding-box diagonal (module docs).
-    pub scale: f64,
-}
-
-impl AttributeCost {
-    /// The added cost of removing `v0` into `v1`.
-    #[inline]
-    pub fn cost(&self, v0: u32, v1: u32) -> f64 {
-        let d = self.dims;
-        let (a, b) = (v0 as usize * d, v1 as usize * d);
-        let diff: f64 = self.values[a..a + d]
-            .iter()
-            .zip(&self.values[b..b + d])
-            .map(|(x, y)| f64::from(x - y).powi(2))
-            .sum();
-        self.scale * self.area[v0 as usize] * diff
-    }
 }

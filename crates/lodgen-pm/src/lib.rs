@@ -22,6 +22,8 @@
 //! levels.
 
 mod adjacency;
+pub mod attrfit;
+mod attrquadric;
 pub mod bvh;
 pub mod collapse;
 pub mod curvature;
@@ -94,8 +96,10 @@ pub fn simplify(
 /// along itself (see [`features`]). The log carries every corner's wedge
 /// (`pm.wedges`, input vertex indices), so replay restores them exactly.
 ///
-/// `attributes` holds `dims` weighted values per input vertex (empty with
-/// `dims == 0`): they add the attribute term of [`features`] to the costs.
+/// `attributes` holds `dims` weighted values per input vertex, i.e. per
+/// wedge (empty with `dims == 0`): they add Hoppe 1999 attribute quadrics,
+/// one per wedge, to the costs (see ARCHITECTURE.md); non-finite values
+/// count as 0.
 /// Wrong lengths are a [`MeshError::AttributeCount`].
 pub fn simplify_with_wedges(
     positions: &[[f32; 3]],
@@ -112,25 +116,7 @@ pub fn simplify_with_wedges(
         });
     }
     let prepared = prepare(positions, indices)?;
-    let nw = prepared.mesh.positions.len();
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
-    if dims > 0 {
-        // each welded vertex takes the values of its first input vertex
-        let mut values = vec![f32::NAN; dims * nw];
-        for (v, &w) in prepared.vertex_map.iter().enumerate() {
-            let w = w as usize;
-            if w < nw && values[dims * w].is_nan() {
-                values[dims * w..dims * (w + 1)]
-                    .copy_from_slice(&attributes[dims * v..dims * (v + 1)]);
-            }
-        }
-        for x in &mut values {
-            if !x.is_finite() {
-                *x = 0.0;
-            }
-        }
-        s.set_attributes(values, dims);
-    }
     let wedges = prepared
         .triangle_map
         .iter()
@@ -140,6 +126,14 @@ pub fn simplify_with_wedges(
         })
         .collect();
     s.set_wedges(wedges);
+    if dims > 0 {
+        // per wedge (the caller's vertex ids), non-finite values as 0
+        let values = attributes
+            .iter()
+            .map(|&x| if x.is_finite() { x } else { 0.0 })
+            .collect();
+        s.set_attributes(values, dims);
+    }
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {

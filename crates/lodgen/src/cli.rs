@@ -60,13 +60,17 @@ pub struct BuildArgs {
     #[arg(long, value_enum, default_value_t = BoundaryMode::Weighted)]
     pub boundary: BoundaryMode,
 
-    /// Weights of attributes in the cost, e.g. "normal=0.5,uv=1,color=0.5"
-    /// (unnamed ones keep their default, 0). 1 makes an attribute
-    /// difference of 1 cost like a displacement by the bounding-box
-    /// diagonal. Seams, hard edges and material borders are kept whatever
-    /// the weights; the term is off by default because on the meshes
-    /// measured it cost more geometry than it saved (docs in ARCHITECTURE.md).
-    #[arg(long, value_name = "LIST", default_value = "normal=0,uv=0,color=0")]
+    /// Weights of attributes in the cost (Hoppe 1999 attribute quadrics),
+    /// e.g. "normal=0.5,uv=1,color=0.5" (unnamed ones keep their default).
+    /// 1 makes an attribute difference of 1 cost like a displacement by the
+    /// bounding-box diagonal; 0 leaves an attribute out. Seams, hard edges
+    /// and material borders are kept whatever the weights. The defaults
+    /// measured best on spot.obj (`cargo xtask attributes`, ARCHITECTURE.md).
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "normal=0.05,uv=0.25,color=0.25"
+    )]
     pub attribute_weights: String,
 
     /// Weight of the border constraint planes relative to the face planes

@@ -29,7 +29,13 @@
 //!   chain's bounding box; the dequantization (translation + uniform scale) is
 //!   the transform of the LOD nodes. For glTF input the LOD nodes are then new
 //!   children of the node that referenced the mesh, so that node's own children
-//!   do not inherit the dequantization.
+//!   do not inherit the dequantization. The other attributes keep compact
+//!   formats (`KHR_mesh_quantization` and the core spec): NORMAL and TANGENT
+//!   normalized `i8`, TEXCOORD_n normalized `u16` when within [0, 1] (float
+//!   otherwise), COLOR_n normalized `u8` when within [0, 1], WEIGHTS_n
+//!   normalized `u8` with each vertex's sets summing to exactly 255, JOINTS_n
+//!   `u8` when every joint index of the primitive is below 256 (`u16`
+//!   otherwise). Without `quantize`: floats, `u16` joints.
 //!
 //! # Buffer layout
 //! Each level's vertex and index data (all chains' level `k`) is one buffer
@@ -238,6 +244,9 @@ struct Prepared {
     colors: Option<Vec<[f32; 4]>>,
     joints: Option<Vec<[u16; 4]>>,
     weights: Option<Vec<[f32; 4]>>,
+    extra_colors: Vec<Vec<[f32; 4]>>,
+    extra_joints: Vec<Vec<[u16; 4]>>,
+    extra_weights: Vec<Vec<[f32; 4]>>,
     indices: Vec<u32>,
 }
 
@@ -390,6 +399,15 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
     if let Some(j) = &p.joints {
         check_len("JOINTS_0", j.len())?;
     }
+    for c in &p.extra_colors {
+        finite(&Some(c.clone()), "COLOR_n", &check_len)?;
+    }
+    for w in &p.extra_weights {
+        finite(&Some(w.clone()), "WEIGHTS_n", &check_len)?;
+    }
+    for j in &p.extra_joints {
+        check_len("JOINTS_n", j.len())?;
+    }
     if let Some(vertex) = p
         .positions
         .iter()
@@ -437,8 +455,98 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
         colors: p.colors.as_deref().map(|v| reorder(v, &order)),
         joints: p.joints.as_deref().map(|v| reorder(v, &order)),
         weights: p.weights.as_deref().map(|v| reorder(v, &order)),
+        extra_colors: p.extra_colors.iter().map(|v| reorder(v, &order)).collect(),
+        extra_joints: p.extra_joints.iter().map(|v| reorder(v, &order)).collect(),
+        extra_weights: p.extra_weights.iter().map(|v| reorder(v, &order)).collect(),
         indices,
     }))
+}
+
+/// One vertex attribute, encoded.
+struct Encoded {
+    name: String,
+    bytes: Vec<u8>,
+    stride: usize,
+    component: u32,
+    normalized: bool,
+    kind: &'static str,
+}
+
+impl Encoded {
+    fn new(
+        name: &str,
+        bytes: Vec<u8>,
+        stride: usize,
+        component: u32,
+        normalized: bool,
+        kind: &'static str,
+    ) -> Encoded {
+        Encoded {
+            name: name.into(),
+            bytes,
+            stride,
+            component,
+            normalized,
+            kind,
+        }
+    }
+}
+
+/// `x` in [-1, 1] as a signed normalized byte.
+fn snorm8(x: f32) -> i8 {
+    (f64::from(x) * 127.0).round().clamp(-127.0, 127.0) as i8
+}
+
+/// `x` in [0, 1] as an unsigned normalized byte.
+fn unorm8(x: f32) -> u8 {
+    (f64::from(x) * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// `x` in [0, 1] as an unsigned normalized short.
+fn unorm16(x: f32) -> u16 {
+    (f64::from(x) * 65535.0).round().clamp(0.0, 65535.0) as u16
+}
+
+/// One vertex's skin weights (all sets) as unsigned normalized bytes summing
+/// to exactly 255, as glTF requires: rounded, the rounding error given to
+/// the largest weight (all on the first when they sum to 0).
+fn unorm8_weights(w: &[f32]) -> Vec<u8> {
+    let clean: Vec<f64> = w
+        .iter()
+        .map(|&x| {
+            if x.is_finite() {
+                f64::from(x).max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let sum: f64 = clean.iter().sum();
+    let mut q: Vec<i32> = if sum > 0.0 {
+        clean
+            .iter()
+            .map(|x| (x / sum * 255.0).round() as i32)
+            .collect()
+    } else {
+        (0..w.len()).map(|i| if i == 0 { 255 } else { 0 }).collect()
+    };
+    let total: i32 = q.iter().sum();
+    let largest = (0..q.len()).max_by_key(|&i| (q[i], std::cmp::Reverse(i)));
+    if let Some(i) = largest {
+        q[i] = (q[i] + 255 - total).clamp(0, 255);
+    }
+    q.into_iter().map(|x| x as u8).collect()
+}
+
+/// Set 0 (when present) and sets 1, 2, … with their set numbers.
+fn sets<'a, T>(
+    first: &'a Option<Vec<T>>,
+    extra: &'a [Vec<T>],
+) -> impl Iterator<Item = (usize, &'a Vec<T>)> {
+    first
+        .iter()
+        .map(|v| (0, v))
+        .chain(extra.iter().enumerate().map(|(i, v)| (i + 1, v)))
 }
 
 fn normalized(v: [f32; 3]) -> Option<[f32; 3]> {
@@ -512,6 +620,7 @@ fn dequantization(levels: &[Vec<Prepared>]) -> ([f64; 3], f64) {
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const BYTE: u32 = 5120;
+const UNSIGNED_BYTE: u32 = 5121;
 const SHORT: u32 = 5122;
 const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
@@ -680,6 +789,111 @@ impl Builder {
         Ok((meshes, level_bytes))
     }
 
+    /// Every attribute but POSITION, NORMAL and TEXCOORD_0, encoded.
+    fn other_attributes(&self, p: &Prepared) -> Vec<Encoded> {
+        let q = self.opts.quantize;
+        let mut out = Vec::new();
+        if let Some(t) = &p.tangents {
+            out.push(if q {
+                // signed normalized bytes; w = ±1 exactly
+                let bytes = t.iter().flatten().map(|&c| snorm8(c) as u8).collect();
+                Encoded::new("TANGENT", bytes, 4, BYTE, true, "VEC4")
+            } else {
+                Encoded::new(
+                    "TANGENT",
+                    f32_bytes(t.iter().flatten()),
+                    16,
+                    FLOAT,
+                    false,
+                    "VEC4",
+                )
+            });
+        }
+        for (i, uv) in p.extra_texcoords.iter().enumerate() {
+            let name = format!("TEXCOORD_{}", i + 1);
+            out.push(
+                if q && uv.iter().flatten().all(|c| (0.0..=1.0).contains(c)) {
+                    let bytes = uv
+                        .iter()
+                        .flatten()
+                        .flat_map(|&c| unorm16(c).to_le_bytes())
+                        .collect();
+                    Encoded::new(&name, bytes, 4, UNSIGNED_SHORT, true, "VEC2")
+                } else {
+                    Encoded::new(
+                        &name,
+                        f32_bytes(uv.iter().flatten()),
+                        8,
+                        FLOAT,
+                        false,
+                        "VEC2",
+                    )
+                },
+            );
+        }
+        for (i, c) in sets(&p.colors, &p.extra_colors) {
+            let name = format!("COLOR_{i}");
+            out.push(
+                if q && c.iter().flatten().all(|x| (0.0..=1.0).contains(x)) {
+                    let bytes = c.iter().flatten().map(|&x| unorm8(x)).collect();
+                    Encoded::new(&name, bytes, 4, UNSIGNED_BYTE, true, "VEC4")
+                } else {
+                    Encoded::new(
+                        &name,
+                        f32_bytes(c.iter().flatten()),
+                        16,
+                        FLOAT,
+                        false,
+                        "VEC4",
+                    )
+                },
+            );
+        }
+        let weights: Vec<(usize, &Vec<[f32; 4]>)> = sets(&p.weights, &p.extra_weights).collect();
+        if q && !weights.is_empty() {
+            // u8 per weight, each vertex's sets summing to exactly 255
+            let mut bytes = vec![Vec::with_capacity(4 * p.positions.len()); weights.len()];
+            for v in 0..p.positions.len() {
+                let all: Vec<f32> = weights.iter().flat_map(|(_, w)| w[v]).collect();
+                let quantized = unorm8_weights(&all);
+                for (s, chunk) in quantized.chunks_exact(4).enumerate() {
+                    bytes[s].extend_from_slice(chunk);
+                }
+            }
+            for ((i, _), b) in weights.iter().zip(bytes) {
+                let name = format!("WEIGHTS_{i}");
+                out.push(Encoded::new(&name, b, 4, UNSIGNED_BYTE, true, "VEC4"));
+            }
+        } else {
+            for (i, w) in weights {
+                let name = format!("WEIGHTS_{i}");
+                out.push(Encoded::new(
+                    &name,
+                    f32_bytes(w.iter().flatten()),
+                    16,
+                    FLOAT,
+                    false,
+                    "VEC4",
+                ));
+            }
+        }
+        let joints: Vec<(usize, &Vec<[u16; 4]>)> = sets(&p.joints, &p.extra_joints).collect();
+        let small = joints
+            .iter()
+            .all(|(_, j)| j.iter().flatten().all(|&x| x < 256));
+        for (i, j) in joints {
+            let name = format!("JOINTS_{i}");
+            out.push(if q && small {
+                let bytes = j.iter().flatten().map(|&x| x as u8).collect();
+                Encoded::new(&name, bytes, 4, UNSIGNED_BYTE, false, "VEC4")
+            } else {
+                let bytes = j.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+                Encoded::new(&name, bytes, 8, UNSIGNED_SHORT, false, "VEC4")
+            });
+        }
+        out
+    }
+
     fn add_primitive(
         &mut self,
         segment: usize,
@@ -782,42 +996,24 @@ impl Builder {
             attributes.insert("TEXCOORD_0".into(), self.accessor(accessor).into());
         }
 
-        // TANGENT, TEXCOORD_1.., COLOR_0, WEIGHTS_0 as floats (allowed with
-        // KHR_mesh_quantization too), JOINTS_0 as u16.
-        let mut floats: Vec<(String, Vec<u8>, usize, &str)> = Vec::new();
-        if let Some(t) = &p.tangents {
-            floats.push(("TANGENT".into(), f32_bytes(t.iter().flatten()), 16, "VEC4"));
-        }
-        for (i, uv) in p.extra_texcoords.iter().enumerate() {
-            let name = format!("TEXCOORD_{}", i + 1);
-            floats.push((name, f32_bytes(uv.iter().flatten()), 8, "VEC2"));
-        }
-        if let Some(c) = &p.colors {
-            floats.push(("COLOR_0".into(), f32_bytes(c.iter().flatten()), 16, "VEC4"));
-        }
-        if let Some(w) = &p.weights {
-            floats.push((
-                "WEIGHTS_0".into(),
-                f32_bytes(w.iter().flatten()),
-                16,
-                "VEC4",
-            ));
-        }
-        for (name, bytes, stride, ty) in floats {
-            let (view, b) = self.view(segment, Payload::Attribute { bytes, stride })?;
+        // TANGENT, TEXCOORD_1.., COLOR_n, WEIGHTS_n, JOINTS_n: floats and
+        // u16 joints, or with `quantize` the compact formats the core spec
+        // and KHR_mesh_quantization allow (module docs).
+        for a in self.other_attributes(p) {
+            let (view, b) = self.view(
+                segment,
+                Payload::Attribute {
+                    bytes: a.bytes,
+                    stride: a.stride,
+                },
+            )?;
             total += b;
-            let a = self.accessor(
-                json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": ty}),
-            );
-            attributes.insert(name, a.into());
-        }
-        if let Some(j) = &p.joints {
-            let bytes: Vec<u8> = j.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-            let (view, b) = self.view(segment, Payload::Attribute { bytes, stride: 8 })?;
-            total += b;
-            let a = self.accessor(json!({"bufferView": view, "componentType": UNSIGNED_SHORT,
-                                         "count": count, "type": "VEC4"}));
-            attributes.insert("JOINTS_0".into(), a.into());
+            let mut acc = json!({"bufferView": view, "componentType": a.component,
+                                 "count": count, "type": a.kind});
+            if a.normalized {
+                acc["normalized"] = true.into();
+            }
+            attributes.insert(a.name, self.accessor(acc).into());
         }
 
         // Indices: u16 when every index fits below the primitive-restart value.

@@ -17,13 +17,18 @@
 //! positions for topology and treats every edge across which wedges differ
 //! — UV seams, hard normals, colour or skin discontinuities, material
 //! borders — as a feature edge that collapses only along itself
-//! (`lodgen_pm::features`). The log tracks each corner's wedge, and a level's
-//! corner takes the attributes of its wedge: values are those of a source
-//! vertex of the same chart (half-edge for attributes, so JOINTS come from
-//! that source vertex and are never interpolated), normals renormalised,
-//! tangents re-orthogonalised against them, WEIGHTS renormalised to sum 1.
+//! (`lodgen_pm::features`); the cost adds attribute quadrics per wedge
+//! (`AttributeWeights`). The log tracks each corner's wedge, and a level's
+//! corner starts from the attributes of its wedge (a source vertex of the
+//! same chart): JOINTS / WEIGHTS of every set stay those of that one vertex
+//! (never interpolated, weights renormalised to sum 1 over all sets), while
+//! normals, UVs, tangents and colours of every level below the input are
+//! fitted to the input surface (`lodgen_pm::attrfit`: least squares, chart
+//! by chart, seams keep their input values), then normals renormalised,
+//! tangents re-orthogonalised against them, colours clamped to [0, 1].
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
+use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
 use lodgen_pm::measure::{self, ErrorReport, MeasureOptions, MeshRef};
 use lodgen_pm::{
@@ -58,30 +63,32 @@ pub struct BuildOptions {
     pub attribute_weights: AttributeWeights,
 }
 
-/// Weights of each attribute in the cost: a difference of 1 in an
-/// attribute at weight 1 costs like a displacement by the bounding-box
-/// diagonal. 0 leaves an attribute out (its seams are still kept).
+/// Weights of each attribute in the cost (Hoppe 1999 attribute quadrics,
+/// `lodgen_pm::features`): a difference of 1 in an attribute at weight 1
+/// costs like a displacement by the bounding-box diagonal. 0 leaves an
+/// attribute out (its seams are still kept).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AttributeWeights {
-    /// Unit normals (a difference of 2 is opposite). Default value: 0.5.
+    /// Unit normals (a difference of 2 is opposite). Default value: 0.05.
     pub normal: f32,
-    /// `TEXCOORD_0`. Default value: 1.
+    /// `TEXCOORD_0`. Default value: 0.25.
     pub uv: f32,
-    /// `COLOR_0`, RGBA. Default value: 0.5.
+    /// `COLOR_0`, RGBA. Default value: 0.25.
     pub color: f32,
 }
 
 impl AttributeWeights {
-    /// Off by default: seams, hard edges and material borders are kept by
-    /// the feature-edge rule either way, and on spot.obj at 10 % the
-    /// attribute term (meshoptimizer's 0.5 / 1 scale) raised the geometric
-    /// Hausdorff error from 1.02 % to 2.45 % and the UV RMS from 0.023 to
-    /// 0.032 for a small normal gain (`cargo xtask attributes`). It is a
-    /// plain vertex-difference term, not Hoppe's attribute quadrics yet.
+    /// What measured best on spot.obj (`cargo xtask attributes`, smooth
+    /// normals): at 10 % and 2 % every pair of weights from normal
+    /// 0.03–0.08 × uv 0.1–0.5 beat meshoptimizer's `simplify_with_attributes`
+    /// on UV and normal error; 0.05 / 0.25 sits in the middle and keeps the
+    /// geometric Hausdorff error below meshoptimizer's too. Colour is not
+    /// measured (no test mesh has colours); it gets the UV weight, being
+    /// in the same [0, 1] range.
     pub const DEFAULT: AttributeWeights = AttributeWeights {
-        normal: 0.0,
-        uv: 0.0,
-        color: 0.0,
+        normal: 0.05,
+        uv: 0.25,
+        color: 0.25,
     };
 }
 
@@ -187,7 +194,16 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
     if let Some(a) = &p.weights {
         put(&a[v]);
     }
+    for a in &p.extra_colors {
+        put(&a[v]);
+    }
+    for a in &p.extra_weights {
+        put(&a[v]);
+    }
     if let Some(a) = &p.joints {
+        k.extend(a[v].map(u32::from));
+    }
+    for a in &p.extra_joints {
         k.extend(a[v].map(u32::from));
     }
     k
@@ -401,6 +417,7 @@ pub fn build_one(
     let mut errors = Vec::with_capacity(splits.len());
     let mut lod_levels = Vec::with_capacity(splits.len());
     let mut cursor = pm.cursor();
+    let fit_source = FitSource::new(mesh, &flat, &simplified);
     for (li, &k) in splits.iter().enumerate() {
         progress(Progress::Measuring {
             mesh: index,
@@ -415,8 +432,20 @@ pub fn build_one(
             &opts.measure,
         )
         .map_err(measure_err)?;
+        // a level below the input gets fitted values (module docs)
+        let fitted = match (&fit_source, cursor.wedges()) {
+            (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
+            _ => None,
+        };
         lod_levels.push(LodLevel {
-            primitives: extract(mesh, &flat, &simplified, m, cursor.wedges()),
+            primitives: extract(
+                mesh,
+                &flat,
+                &simplified,
+                m,
+                cursor.wedges(),
+                fitted.as_ref(),
+            ),
             hausdorff: report.hausdorff() / diagonal.max(f64::MIN_POSITIVE),
             rms: report.rms() / diagonal.max(f64::MIN_POSITIVE),
             screen_coverage: 0.0,
@@ -441,16 +470,245 @@ pub fn build_one(
     })
 }
 
+/// Which attributes are fitted per level (`lodgen_pm::attrfit`), and where
+/// each sits in a wedge's value vector; present when some primitive has it.
+#[derive(Clone, Debug, Default)]
+struct Channels {
+    normal: Option<usize>,
+    uv: Option<usize>,
+    /// Tangent xyz (w, the handedness, is the source's).
+    tangent: Option<usize>,
+    extra_uv: Vec<usize>,
+    color: Option<usize>,
+    /// `COLOR_1`, `COLOR_2`, …
+    extra_color: Vec<usize>,
+    dims: usize,
+}
+
+impl Channels {
+    fn of(mesh: &SourceMesh) -> Channels {
+        let any = |f: &dyn Fn(&Primitive) -> bool| mesh.primitives.iter().any(f);
+        let mut c = Channels::default();
+        let mut take = |present: bool, n: usize| {
+            present.then(|| {
+                c.dims += n;
+                c.dims - n
+            })
+        };
+        let normal = take(any(&|p| p.normals.is_some()), 3);
+        let uv = take(any(&|p| p.texcoords.is_some()), 2);
+        let tangent = take(any(&|p| p.tangents.is_some()), 3);
+        let extra = mesh
+            .primitives
+            .iter()
+            .map(|p| p.extra_texcoords.len())
+            .max()
+            .unwrap_or(0);
+        let extra_uv: Vec<usize> = (0..extra).filter_map(|_| take(true, 2)).collect();
+        let color = take(any(&|p| p.colors.is_some()), 4);
+        let extra = mesh
+            .primitives
+            .iter()
+            .map(|p| p.extra_colors.len())
+            .max()
+            .unwrap_or(0);
+        let extra_color: Vec<usize> = (0..extra).filter_map(|_| take(true, 4)).collect();
+        Channels {
+            normal,
+            uv,
+            tangent,
+            extra_uv,
+            color,
+            extra_color,
+            dims: c.dims,
+        }
+    }
+
+    /// The component range of every channel.
+    fn ranges(&self) -> Vec<Channel> {
+        let mut out = Vec::new();
+        let mut put = |start: Option<usize>, n: usize, bounded: bool| {
+            if let Some(i) = start {
+                out.push(Channel {
+                    components: i..i + n,
+                    bounded,
+                });
+            }
+        };
+        // unit vectors are renormalised; UVs and colours never extrapolate
+        put(self.normal, 3, false);
+        put(self.uv, 2, true);
+        put(self.tangent, 3, false);
+        for &i in &self.extra_uv {
+            put(Some(i), 2, true);
+        }
+        put(self.color, 4, true);
+        for &i in &self.extra_color {
+            put(Some(i), 4, true);
+        }
+        out
+    }
+
+    /// The channel values of vertex `v` of `p` (defaults where it lacks one).
+    fn values(&self, p: &Primitive, v: usize, out: &mut Vec<f32>) {
+        let start = out.len();
+        out.resize(start + self.dims, 0.0);
+        let o = &mut out[start..];
+        if let Some(i) = self.normal {
+            let n = p
+                .normals
+                .as_ref()
+                .map_or([0.0, 0.0, 1.0], |a| normalize3(a[v]));
+            o[i..i + 3].copy_from_slice(&n);
+        }
+        if let Some(i) = self.uv {
+            o[i..i + 2].copy_from_slice(&p.texcoords.as_ref().map_or([0.0; 2], |a| a[v]));
+        }
+        if let Some(i) = self.tangent {
+            let t = p.tangents.as_ref().map_or([1.0, 0.0, 0.0, 1.0], |a| a[v]);
+            o[i..i + 3].copy_from_slice(&t[..3]);
+        }
+        for (k, &i) in self.extra_uv.iter().enumerate() {
+            o[i..i + 2].copy_from_slice(&p.extra_texcoords.get(k).map_or([0.0; 2], |a| a[v]));
+        }
+        if let Some(i) = self.color {
+            o[i..i + 4].copy_from_slice(&p.colors.as_ref().map_or([1.0; 4], |a| a[v]));
+        }
+        for (k, &i) in self.extra_color.iter().enumerate() {
+            o[i..i + 4].copy_from_slice(&p.extra_colors.get(k).map_or([1.0; 4], |a| a[v]));
+        }
+        for x in o.iter_mut() {
+            if !x.is_finite() {
+                *x = 0.0;
+            }
+        }
+    }
+
+    /// Overwrite the last vertex pushed to `to` with fitted values `f`,
+    /// made valid again: normals unit, tangents orthogonal to them, colours
+    /// in [0, 1]. Only attributes the source primitive `from` has.
+    fn apply(&self, to: &mut Primitive, from: &Primitive, f: &[f32]) {
+        if let (Some(i), Some(n), true) = (self.normal, to.normals.as_mut(), from.normals.is_some())
+        {
+            if let Some(last) = n.last_mut() {
+                *last = normalize3([f[i], f[i + 1], f[i + 2]]);
+            }
+        }
+        if let (Some(i), Some(uv), true) =
+            (self.uv, to.texcoords.as_mut(), from.texcoords.is_some())
+        {
+            if let Some(last) = uv.last_mut() {
+                *last = [f[i], f[i + 1]];
+            }
+        }
+        let normal = to.normals.as_ref().and_then(|n| n.last().copied());
+        if let (Some(i), Some(t), true) =
+            (self.tangent, to.tangents.as_mut(), from.tangents.is_some())
+        {
+            if let Some(last) = t.last_mut() {
+                *last = orthogonal_tangent([f[i], f[i + 1], f[i + 2], last[3]], normal);
+            }
+        }
+        for (k, &i) in self.extra_uv.iter().enumerate() {
+            if from.extra_texcoords.get(k).is_some() {
+                if let Some(last) = to.extra_texcoords.get_mut(k).and_then(|a| a.last_mut()) {
+                    *last = [f[i], f[i + 1]];
+                }
+            }
+        }
+        let rgba = |i: usize| [f[i], f[i + 1], f[i + 2], f[i + 3]].map(|x| x.clamp(0.0, 1.0));
+        if let (Some(i), Some(c), true) = (self.color, to.colors.as_mut(), from.colors.is_some()) {
+            if let Some(last) = c.last_mut() {
+                *last = rgba(i);
+            }
+        }
+        for (k, &i) in self.extra_color.iter().enumerate() {
+            if from.extra_colors.get(k).is_some() {
+                if let Some(last) = to.extra_colors.get_mut(k).and_then(|a| a.last_mut()) {
+                    *last = rgba(i);
+                }
+            }
+        }
+    }
+}
+
+/// The input surface for the per-level attribute fit: flat positions,
+/// triangles as wedge (representative flat vertex) triples, and every
+/// flat vertex's channel values.
+struct FitSource {
+    channels: Channels,
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    values: Vec<f32>,
+}
+
+impl FitSource {
+    /// `None` when there is nothing to fit (no per-corner attributes
+    /// besides joints and weights, which are never interpolated).
+    fn new(mesh: &SourceMesh, flat: &Flat, s: &Simplified) -> Option<FitSource> {
+        let channels = Channels::of(mesh);
+        if channels.dims == 0 || s.pm.wedges.is_none() {
+            return None;
+        }
+        let mut values = Vec::with_capacity(channels.dims * flat.positions.len());
+        for p in &mesh.primitives {
+            for v in 0..p.positions.len() {
+                channels.values(p, v, &mut values);
+            }
+        }
+        let wedge = wedge_of_vertex(mesh, flat);
+        let triangles = flat
+            .indices
+            .chunks_exact(3)
+            .map(|t| [0, 1, 2].map(|k| wedge[t[k] as usize]))
+            .collect();
+        Some(FitSource {
+            channels,
+            positions: flat.positions.clone(),
+            triangles,
+            values,
+        })
+    }
+
+    fn fit(&self, level: &Mesh, wedges: &[[u32; 3]]) -> Fitted {
+        let values = lodgen_pm::attrfit::fit(
+            lodgen_pm::attrfit::Source {
+                positions: &self.positions,
+                triangles: &self.triangles,
+                values: &self.values,
+                dims: self.channels.dims,
+            },
+            lodgen_pm::attrfit::Level {
+                positions: &level.positions,
+                triangles: &level.triangles,
+                wedges,
+            },
+            &self.channels.ranges(),
+        );
+        Fitted {
+            channels: self.channels.clone(),
+            values,
+        }
+    }
+}
+
+/// A level's fitted values and the channel layout they use.
+struct Fitted {
+    channels: Channels,
+    values: lodgen_pm::attrfit::Fitted,
+}
+
 /// Turn a level of the progressive mesh back into the source's primitives,
 /// transferring attributes corner by corner from each corner's wedge
 /// (`wedges`, flat vertex ids; without them, from the level vertex's first
-/// source vertex).
+/// source vertex), then the fitted values where there are some.
 fn extract(
     source: &SourceMesh,
     flat: &Flat,
     s: &Simplified,
     level: &Mesh,
     wedges: Option<&[[u32; 3]]>,
+    fitted: Option<&Fitted>,
 ) -> Vec<Primitive> {
     let pm = &s.pm;
     // First input vertex of each welded vertex.
@@ -472,6 +730,9 @@ fn extract(
             colors: p.colors.as_ref().map(|_| Vec::new()),
             joints: p.joints.as_ref().map(|_| Vec::new()),
             weights: p.weights.as_ref().map(|_| Vec::new()),
+            extra_colors: vec![Vec::new(); p.extra_colors.len()],
+            extra_joints: vec![Vec::new(); p.extra_joints.len()],
+            extra_weights: vec![Vec::new(); p.extra_weights.len()],
             ..Primitive::default()
         })
         .collect();
@@ -491,7 +752,13 @@ fn extract(
                 prim.positions.push(level.positions[v as usize]);
                 // the source vertex may belong to another primitive
                 let (sp, local) = locate(flat, src);
-                push_attributes(prim, &source.primitives[sp], local);
+                let from = &source.primitives[sp];
+                push_attributes(prim, from, local);
+                if let Some(f) = fitted {
+                    if let Some(values) = f.values.get(v, src) {
+                        f.channels.apply(prim, from, values);
+                    }
+                }
                 next
             });
             prims[pi as usize].indices.push(out);
@@ -525,31 +792,61 @@ fn push_attributes(to: &mut Primitive, from: &Primitive, v: usize) {
     if let Some(c) = to.colors.as_mut() {
         c.push(from.colors.as_ref().map_or([1.0; 4], |a| a[v]));
     }
+    for (i, c) in to.extra_colors.iter_mut().enumerate() {
+        c.push(from.extra_colors.get(i).map_or([1.0; 4], |a| a[v]));
+    }
+    // JOINTS_n and WEIGHTS_n: all sets from the same source vertex, the
+    // weights of all sets together renormalised to sum 1
     if let Some(j) = to.joints.as_mut() {
         j.push(from.joints.as_ref().map_or([0; 4], |a| a[v]));
     }
+    for (i, j) in to.extra_joints.iter_mut().enumerate() {
+        j.push(from.extra_joints.get(i).map_or([0; 4], |a| a[v]));
+    }
+    let mut sets: Vec<[f32; 4]> = Vec::with_capacity(1 + to.extra_weights.len());
+    if to.weights.is_some() {
+        sets.push(from.weights.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |a| a[v]));
+    }
+    for i in 0..to.extra_weights.len() {
+        sets.push(from.extra_weights.get(i).map_or([0.0; 4], |a| a[v]));
+    }
+    normalize_weights(&mut sets);
+    let mut sets = sets.into_iter();
     if let Some(w) = to.weights.as_mut() {
-        w.push(normalize_weights(
-            from.weights.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |a| a[v]),
-        ));
+        w.extend(sets.next());
+    }
+    for w in to.extra_weights.iter_mut() {
+        w.extend(sets.next());
     }
 }
 
+/// `n` made unit; already unit vectors keep their bits (so full refinement
+/// gives back the input exactly).
 fn normalize3(n: [f32; 3]) -> [f32; 3] {
     let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if l > 0.0 && l.is_finite() {
+    if (l - 1.0).abs() <= UNIT_EPS {
+        n
+    } else if l > 0.0 && l.is_finite() {
         n.map(|x| x / l)
     } else {
         [0.0, 0.0, 1.0]
     }
 }
 
+/// Tolerance below which a length, a dot product or a weight sum counts as
+/// already normalised (and the input's bits are kept).
+const UNIT_EPS: f32 = 4.0 * f32::EPSILON;
+
 /// Gram–Schmidt: the tangent's xyz made unit and orthogonal to the normal,
 /// its handedness `w` kept as ±1.
 fn orthogonal_tangent(t: [f32; 4], normal: Option<[f32; 3]>) -> [f32; 4] {
     let mut x = [t[0], t[1], t[2]];
+    let d = normal.map_or(0.0, |n| x[0] * n[0] + x[1] * n[1] + x[2] * n[2]);
+    let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+    if d.abs() <= UNIT_EPS && (l - 1.0).abs() <= UNIT_EPS && t[3].abs() == 1.0 {
+        return t;
+    }
     if let Some(n) = normal {
-        let d = x[0] * n[0] + x[1] * n[1] + x[2] * n[2];
         x = [x[0] - d * n[0], x[1] - d * n[1], x[2] - d * n[2]];
     }
     let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
@@ -561,15 +858,24 @@ fn orthogonal_tangent(t: [f32; 4], normal: Option<[f32; 3]>) -> [f32; 4] {
     [x[0], x[1], x[2], if t[3] < 0.0 { -1.0 } else { 1.0 }]
 }
 
-/// Skin weights made non-negative and summing to 1 (all on the first joint
-/// when they sum to 0).
-fn normalize_weights(w: [f32; 4]) -> [f32; 4] {
-    let w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
-    let s: f32 = w.iter().sum();
-    if s > 0.0 {
-        w.map(|x| x / s)
-    } else {
-        [1.0, 0.0, 0.0, 0.0]
+/// Skin weights of one vertex (every WEIGHTS_n set) made non-negative and
+/// summing to 1 over all sets (all on the first joint when they sum to 0).
+fn normalize_weights(sets: &mut [[f32; 4]]) {
+    for w in sets.iter_mut() {
+        *w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+    }
+    let s: f32 = sets.iter().flatten().sum();
+    if (s - 1.0).abs() <= UNIT_EPS {
+        return;
+    }
+    for (i, w) in sets.iter_mut().enumerate() {
+        *w = if s > 0.0 {
+            w.map(|x| x / s)
+        } else if i == 0 {
+            [1.0, 0.0, 0.0, 0.0]
+        } else {
+            [0.0; 4]
+        };
     }
 }
 

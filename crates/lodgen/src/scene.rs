@@ -70,8 +70,16 @@ pub struct Primitive {
     pub colors: Option<Vec<[f32; 4]>>,
     /// `JOINTS_0`: four joint indices per vertex.
     pub joints: Option<Vec<[u16; 4]>>,
-    /// `WEIGHTS_0`: the weights of `joints`, summing to 1.
+    /// `WEIGHTS_0`: the weights of `joints`; with `extra_weights`, all sets
+    /// together sum to 1.
     pub weights: Option<Vec<[f32; 4]>>,
+    /// `COLOR_1`, `COLOR_2`, …: `extra_colors[i]` is set `i + 1`.
+    pub extra_colors: Vec<Vec<[f32; 4]>>,
+    /// `JOINTS_1`, `JOINTS_2`, …: `extra_joints[i]` is set `i + 1` (more
+    /// than four influences per vertex).
+    pub extra_joints: Vec<Vec<[u16; 4]>>,
+    /// `WEIGHTS_1`, `WEIGHTS_2`, …: the weights of `extra_joints[i]`.
+    pub extra_weights: Vec<Vec<[f32; 4]>>,
     /// Triangle list: `indices.len() % 3 == 0`, every index `< positions.len()`.
     pub indices: Vec<u32>,
 }

@@ -244,3 +244,185 @@ fn meshopt_quantized_gltf_decodes_to_the_quantized_data() {
     assert!(has(&cj, "extensionsRequired", "KHR_mesh_quantization"));
     assert_same_decoded(&pj, &pb, &cj, &cb);
 }
+
+/// A ball with every kind of attribute: tangents, two UV sets, two colour
+/// sets, eight skin influences (two JOINTS / WEIGHTS sets).
+fn attribute_scene() -> (Scene, lodgen::scene::LodMesh) {
+    let center = [0.0, 1.0, 0.0];
+    let (positions, indices) = icosphere(2, 1.0, center);
+    let n = positions.len();
+    let uv = sphere_uvs(&positions, center);
+    let d = |v: usize| [0, 1, 2].map(|k| positions[v][k] - center[k]);
+    let tangents = (0..n)
+        .map(|v| {
+            let p = d(v);
+            let l = (p[0] * p[0] + p[2] * p[2]).sqrt();
+            let w = if v % 2 == 0 { 1.0 } else { -1.0 };
+            if l < 1e-6 {
+                [1.0, 0.0, 0.0, w] // at a pole
+            } else {
+                [-p[2] / l, 0.0, p[0] / l, w]
+            }
+        })
+        .collect();
+    let colors = (0..n)
+        .map(|v| d(v).map(|c| 0.5 + 0.5 * c))
+        .map(|c| [c[0], c[1], c[2], 1.0])
+        .collect();
+    let joints = (0..n)
+        .map(|v| [v as u16 % 7, 7, 8 + v as u16 % 3, 11])
+        .collect();
+    let joints1 = (0..n).map(|v| [12, 13, 14, 15 + v as u16 % 2]).collect();
+    let (mut w0, mut w1) = (Vec::new(), Vec::new());
+    for v in 0..n {
+        let raw = [1.0 + v as f32 % 5.0, 0.3, 0.2, 0.1, 0.07, 0.05, 0.02, 0.01];
+        let s: f32 = raw.iter().sum();
+        w0.push([raw[0] / s, raw[1] / s, raw[2] / s, raw[3] / s]);
+        w1.push([raw[4] / s, raw[5] / s, raw[6] / s, raw[7] / s]);
+    }
+    let prim = Primitive {
+        material: Some(0),
+        positions,
+        texcoords: Some(uv.clone()),
+        tangents: Some(tangents),
+        extra_texcoords: vec![uv.iter().map(|t| [t[1], t[0]]).collect()],
+        colors: Some(colors),
+        extra_colors: vec![(0..n)
+            .map(|v| [0.25, (v % 9) as f32 / 8.0, 0.75, 0.5])
+            .collect()],
+        joints: Some(joints),
+        extra_joints: vec![joints1],
+        weights: Some(w0),
+        extra_weights: vec![w1],
+        indices,
+        ..Primitive::default()
+    };
+    let scene = Scene {
+        meshes: vec![SourceMesh {
+            name: "ball".into(),
+            primitives: vec![prim.clone()],
+        }],
+        materials: vec![Material {
+            name: "m".into(),
+            base_color: Some([0.2, 0.4, 0.6, 1.0]),
+        }],
+        origin: Origin::Flat,
+    };
+    let lod = chain("ball", 0, prim, &[0.25]);
+    (scene, lod)
+}
+
+#[test]
+fn quantized_attributes_use_compact_formats() {
+    let (scene, lod) = attribute_scene();
+    let dir = scratch("q-attributes");
+    let mut read = Vec::new();
+    for (name, quantize, compression) in [
+        ("plain.glb", false, Compression::None),
+        ("quantized.glb", true, Compression::None),
+        ("quantized-meshopt.glb", true, Compression::Meshopt),
+    ] {
+        let path = dir.join(name);
+        let opts = WriteOptions {
+            quantize,
+            compression,
+        };
+        let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
+        publish("q-attributes", &summary);
+        let (json, _) = load_raw(&path);
+        let prim = &json["meshes"][0]["primitives"][0]["attributes"];
+        let format = |a: &str| {
+            let acc = &json["accessors"][prim[a].as_u64().unwrap() as usize];
+            (
+                acc["componentType"].as_u64().unwrap(),
+                acc["normalized"].as_bool().unwrap_or(false),
+            )
+        };
+        let expect: [(&str, (u64, bool)); 9] = if quantize {
+            [
+                ("TANGENT", (5120, true)),
+                ("TEXCOORD_1", (5123, true)),
+                ("COLOR_0", (5121, true)),
+                ("COLOR_1", (5121, true)),
+                ("WEIGHTS_0", (5121, true)),
+                ("WEIGHTS_1", (5121, true)),
+                ("JOINTS_0", (5121, false)),
+                ("JOINTS_1", (5121, false)),
+                ("TEXCOORD_0", (5123, true)),
+            ]
+        } else {
+            [
+                ("TANGENT", (5126, false)),
+                ("TEXCOORD_1", (5126, false)),
+                ("COLOR_0", (5126, false)),
+                ("COLOR_1", (5126, false)),
+                ("WEIGHTS_0", (5126, false)),
+                ("WEIGHTS_1", (5126, false)),
+                ("JOINTS_0", (5123, false)),
+                ("JOINTS_1", (5123, false)),
+                ("TEXCOORD_0", (5126, false)),
+            ]
+        };
+        for (a, f) in expect {
+            assert_eq!(format(a), f, "{name} {a}");
+        }
+        // (the reader does not decode EXT_meshopt_compression; the
+        // validator checks that file)
+        if compression == Compression::None {
+            read.push(lodgen::io::read_scene(&path).unwrap());
+        }
+    }
+    // same vertex order in every file (the post-pass does not depend on
+    // the encoding): compare vertex by vertex
+    let plain = &read[0].meshes[0].primitives[0];
+    for scene in &read[1..] {
+        let q = &scene.meshes[0].primitives[0];
+        let n = plain.positions.len();
+        assert_eq!(q.positions.len(), n);
+        let close =
+            |a: &[f32], b: &[f32], tol: f32| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+        for v in 0..n {
+            let (pt, qt) = (
+                plain.tangents.as_ref().unwrap()[v],
+                q.tangents.as_ref().unwrap()[v],
+            );
+            assert!(
+                close(&pt[..3], &qt[..3], 0.5 / 127.0 + 1e-6),
+                "{pt:?} {qt:?}"
+            );
+            assert_eq!(pt[3], qt[3]);
+            let (pc, qc) = (
+                plain.colors.as_ref().unwrap()[v],
+                q.colors.as_ref().unwrap()[v],
+            );
+            assert!(close(&pc, &qc, 0.5 / 255.0 + 1e-6), "{pc:?} {qc:?}");
+            assert!(close(
+                &plain.extra_colors[0][v],
+                &q.extra_colors[0][v],
+                0.5 / 255.0 + 1e-6
+            ));
+            assert!(close(
+                &plain.extra_texcoords[0][v],
+                &q.extra_texcoords[0][v],
+                0.5 / 65535.0 + 1e-6
+            ));
+            assert_eq!(
+                plain.joints.as_ref().unwrap()[v],
+                q.joints.as_ref().unwrap()[v]
+            );
+            assert_eq!(plain.extra_joints[0][v], q.extra_joints[0][v]);
+            let (pw, qw) = (
+                plain.weights.as_ref().unwrap()[v],
+                q.weights.as_ref().unwrap()[v],
+            );
+            assert!(close(&pw, &qw, 2.5 / 255.0), "{pw:?} {qw:?}");
+            assert!(close(
+                &plain.extra_weights[0][v],
+                &q.extra_weights[0][v],
+                2.5 / 255.0
+            ));
+            let sum: f32 = qw.iter().chain(&q.extra_weights[0][v]).sum();
+            assert!((sum - 1.0).abs() < 1e-5, "vertex {v}: weights sum {sum}");
+        }
+    }
+}

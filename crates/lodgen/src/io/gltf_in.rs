@@ -6,7 +6,8 @@
 //! JSON path (`meshes[0].primitives[1].indices[6]`) instead of a panic.
 //!
 //! Every primitive of every mesh is read: `POSITION`, `NORMAL`, `TANGENT`,
-//! `TEXCOORD_n`, `COLOR_0`, `JOINTS_0`, `WEIGHTS_0`
+//! `TEXCOORD_n`, `COLOR_n`, `JOINTS_n`, `WEIGHTS_n` (every set, up to the
+//! first missing one)
 //! (float, or integer with `normalized`), indices (`u8`/`u16`/`u32`, or
 //! sequential when absent), sparse accessors, and the material index.
 //! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` become triangle lists.
@@ -315,23 +316,43 @@ impl Reader<'_> {
             self.same_count(v, n, at, name).map(Some)
         };
         let tangents = optional(Semantic::Tangents, "TANGENT")?;
+        let joint_set = |set: u32| -> Result<Option<Vec<[u16; 4]>>, ReadError> {
+            let name = format!("JOINTS_{set}");
+            let Some(j) = optional(Semantic::Joints(set), &name)? else {
+                return Ok(None);
+            };
+            if let Some(i) = j.iter().position(|q| {
+                q.iter()
+                    .any(|&x| !(0.0..=65535.0).contains(&x) || x.fract() != 0.0)
+            }) {
+                return Err(self.json_err(
+                    &format!("{at}.attributes.{name}"),
+                    format!("vertex {i} has a joint index that is not a u16: {:?}", j[i]),
+                ));
+            }
+            Ok(Some(j.iter().map(|q| q.map(|x| x as u16)).collect()))
+        };
         let colors = optional(Semantic::Colors(0), "COLOR_0")?;
         let weights = optional(Semantic::Weights(0), "WEIGHTS_0")?;
-        let joints = match optional(Semantic::Joints(0), "JOINTS_0")? {
-            Some(j) => {
-                if let Some(i) = j.iter().position(|q| {
-                    q.iter()
-                        .any(|&x| !(0.0..=65535.0).contains(&x) || x.fract() != 0.0)
-                }) {
-                    return Err(self.json_err(
-                        &format!("{at}.attributes.JOINTS_0"),
-                        format!("vertex {i} has a joint index that is not a u16: {:?}", j[i]),
-                    ));
-                }
-                Some(j.iter().map(|q| q.map(|x| x as u16)).collect())
-            }
-            None => None,
-        };
+        let joints = joint_set(0)?;
+        let mut extra_colors = Vec::new();
+        while let Some(c) = optional(
+            Semantic::Colors(extra_colors.len() as u32 + 1),
+            &format!("COLOR_{}", extra_colors.len() + 1),
+        )? {
+            extra_colors.push(c);
+        }
+        let mut extra_joints = Vec::new();
+        while let Some(j) = joint_set(extra_joints.len() as u32 + 1)? {
+            extra_joints.push(j);
+        }
+        let mut extra_weights = Vec::new();
+        while let Some(w) = optional(
+            Semantic::Weights(extra_weights.len() as u32 + 1),
+            &format!("WEIGHTS_{}", extra_weights.len() + 1),
+        )? {
+            extra_weights.push(w);
+        }
         let mut extra_texcoords = Vec::new();
         for set in 1.. {
             let Some(a) = attribute(Semantic::TexCoords(set)) else {
@@ -407,6 +428,9 @@ impl Reader<'_> {
             colors,
             joints,
             weights,
+            extra_colors,
+            extra_joints,
+            extra_weights,
             indices,
         }))
     }

@@ -295,6 +295,9 @@ fn compact(p: Primitive) -> Primitive {
         colors: p.colors.as_deref().map(|c| pick(c, &order)),
         joints: p.joints.as_deref().map(|j| pick(j, &order)),
         weights: p.weights.as_deref().map(|w| pick(w, &order)),
+        extra_colors: p.extra_colors.iter().map(|c| pick(c, &order)).collect(),
+        extra_joints: p.extra_joints.iter().map(|j| pick(j, &order)).collect(),
+        extra_weights: p.extra_weights.iter().map(|w| pick(w, &order)).collect(),
         indices,
     }
 }
