@@ -69,7 +69,7 @@ pub struct BuildArgs {
     #[arg(
         long,
         value_name = "LIST",
-        default_value = "normal=0.05,uv=0.25,color=0.25"
+        default_value = "normal=0.05,uv=0.5,color=0.5"
     )]
     pub attribute_weights: String,
 
