@@ -8,7 +8,7 @@
 
 use crate::adjacency::{FanLookup, Fans};
 use crate::features::{AttributeCost, Features};
-use crate::heap::{f32_order_key, radix_sort_parts, QuadHeap};
+use crate::heap::{bucket_sort_parts, f32_order_key, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
@@ -247,8 +247,6 @@ struct Pass {
     open: bool,
     /// The pass's candidates, sorted; `cursor` is the next one.
     queue: Vec<PassEntry>,
-    /// The radix sort's buffer.
-    scratch: Vec<PassEntry>,
     cursor: usize,
     /// Vertex → the last pass that moved or removed it.
     touched: Vec<u32>,
@@ -726,9 +724,8 @@ impl Simplifier {
 
     /// Cost every live pair (edges and τ partners, both vertices not
     /// locked), sort, and set the pass's goal and cost limit. Pairs are
-    /// listed by their lower vertex, then in fan order, and sorted stably
-    /// by cost: the order depends on nothing but the mesh (not on the
-    /// thread count).
+    /// sorted by the total order (cost, a, b): the order depends on nothing
+    /// but the mesh (not on the thread count).
     fn start_pass(&mut self, factor: f32) {
         let t0 = Instant::now();
         if self.pass.number == 0 || self.vtris.half_dead() {
@@ -781,18 +778,23 @@ impl Simplifier {
             })
             .collect();
         let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
-        let mut scratch = std::mem::take(&mut self.pass.scratch);
-        radix_sort_parts(parts, &mut queue, &mut scratch, |e| f32_order_key(e.cost));
-        debug_assert!(queue
-            .windows(2)
-            .all(|w| w[0].cost.total_cmp(&w[1].cost).is_le()));
+        bucket_sort_parts(
+            parts,
+            &mut queue,
+            |e| (f32_order_key(e.cost) >> 21) as usize,
+            |x, y| {
+                x.cost
+                    .total_cmp(&y.cost)
+                    .then(x.a.cmp(&y.a))
+                    .then(x.b.cmp(&y.b))
+            },
+        );
         let goal = self.live_tris.saturating_sub(self.target);
         // most contractions remove two triangles
         let limit = queue
             .get(goal / 2)
             .map_or(f32::INFINITY, |e| e.cost * factor);
         let pass = &mut self.pass;
-        pass.scratch = scratch;
         pass.number += 1;
         pass.open = true;
         pass.queue = queue;

@@ -7,9 +7,10 @@
 //! entries, the children of a node share one 64-byte cache line and the tree
 //! is half as deep.
 //!
-//! Also [`radix_sort_by_key`], the stable LSD radix sort that orders each
-//! contraction pass (a comparison sort of the pass's pairs was a quarter of
-//! all instructions on the bunny).
+//! Also [`bucket_sort_parts`], which orders each contraction pass: a
+//! counting pass on the top bits of the cost, then a sort per bucket (one
+//! comparison sort of all the pass's pairs was a quarter of all
+//! instructions on the bunny; an LSD radix sort needed a second buffer).
 //!
 //! Owns only the ordering containers; what an entry means is `collapse`'s.
 
@@ -128,83 +129,56 @@ pub fn f32_order_key(x: f32) -> u32 {
     }
 }
 
-/// Sort `items` by `key`, stably (equal keys keep their order), in three
-/// passes of 11 bits; passes whose digit is the same for every item are
-/// skipped. `scratch` is reused between calls.
-pub fn radix_sort_by_key<T: Copy>(
-    items: &mut Vec<T>,
-    scratch: &mut Vec<T>,
-    key: impl Fn(&T) -> u32,
-) {
-    let input = std::mem::take(items);
-    radix_sort_parts(vec![input], items, scratch, key);
-}
-
-/// [`radix_sort_by_key`] of the concatenation of `parts`, into `out`:
-/// the first pass reads the parts directly and frees them, so they are
-/// never copied into one list first (peak memory).
-pub fn radix_sort_parts<T: Copy>(
+/// Sort the concatenation of `parts` into `out` by `order`, a total order
+/// whose coarse part is `bucket(item) < 2048` (items in a lower bucket
+/// come first): one counting pass moves the items out of the parts (which
+/// are freed as it goes) into their buckets, then each bucket is sorted in
+/// place, in parallel. Needs no second buffer, unlike an LSD radix sort
+/// (peak memory: the first contraction pass's list is the largest
+/// allocation of a run).
+pub fn bucket_sort_parts<T: Copy + Send>(
     parts: Vec<Vec<T>>,
     out: &mut Vec<T>,
-    scratch: &mut Vec<T>,
-    key: impl Fn(&T) -> u32,
+    bucket: impl Fn(&T) -> usize,
+    order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
 ) {
-    const BITS: u32 = 11;
-    const BUCKETS: usize = 1 << BITS;
+    use rayon::prelude::*;
+    const BUCKETS: usize = 2048;
     let n: usize = parts.iter().map(Vec::len).sum();
+    out.clear();
     let Some(&first) = parts.iter().find_map(|p| p.first()) else {
-        out.clear();
         return;
     };
-    let mut counts = vec![[0u32; BUCKETS]; 3];
+    let mut counts = vec![0usize; BUCKETS];
     for it in parts.iter().flatten() {
-        let k = key(it);
-        for (d, c) in counts.iter_mut().enumerate() {
-            c[((k >> (BITS * d as u32)) as usize) & (BUCKETS - 1)] += 1;
+        counts[bucket(it)] += 1;
+    }
+    let mut next = Vec::with_capacity(BUCKETS);
+    let mut sum = 0;
+    for &c in &counts {
+        next.push(sum);
+        sum += c;
+    }
+    out.resize(n, first);
+    for part in parts {
+        for it in &part {
+            let b = bucket(it);
+            out[next[b]] = *it;
+            next[b] += 1;
         }
     }
-    let mut parts = Some(parts);
-    for (d, c) in counts.iter_mut().enumerate() {
-        if c.iter().any(|&x| x as usize == n) {
-            continue; // this digit is the same for every item
+    let mut slices: Vec<&mut [T]> = Vec::with_capacity(BUCKETS);
+    let mut rest = &mut out[..];
+    for &c in &counts {
+        let (head, tail) = rest.split_at_mut(c);
+        if c > 1 {
+            slices.push(head);
         }
-        let mut sum = 0;
-        for x in c.iter_mut() {
-            let v = *x;
-            *x = sum;
-            sum += v;
-        }
-        let shift = BITS * d as u32;
-        let mut scatter = |dst: &mut Vec<T>, it: &T| {
-            let b = ((key(it) >> shift) as usize) & (BUCKETS - 1);
-            dst[c[b] as usize] = *it;
-            c[b] += 1;
-        };
-        if let Some(parts) = parts.take() {
-            out.clear();
-            out.resize(n, first);
-            for part in parts {
-                for it in &part {
-                    scatter(out, it);
-                }
-            }
-        } else {
-            scratch.clear();
-            scratch.resize(n, first);
-            for it in out.iter() {
-                scatter(scratch, it);
-            }
-            std::mem::swap(out, scratch);
-        }
+        rest = tail;
     }
-    if let Some(parts) = parts {
-        // every digit was constant: already in order
-        out.clear();
-        out.reserve(n);
-        for part in parts {
-            out.extend_from_slice(&part);
-        }
-    }
+    slices
+        .into_par_iter()
+        .for_each(|s| s.sort_unstable_by(&order));
 }
 
 #[cfg(test)]
@@ -230,11 +204,19 @@ mod tests {
         }
 
         #[test]
-        fn radix_sort_is_a_stable_sort(v in prop::collection::vec((any::<f32>(), any::<u16>()), 0..3000)) {
+        fn bucket_sort_sorts(v in prop::collection::vec((any::<f32>(), any::<u16>()), 0..3000), split in 0usize..3000) {
+            let order = |x: &(f32, u16), y: &(f32, u16)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+            let key = |x: &(f32, u16)| {
+                let b = x.0.to_bits();
+                let k = if b >> 31 == 1 { !b } else { b | 0x8000_0000 };
+                (k >> 21) as usize
+            };
             let mut expected = v.clone();
-            expected.sort_by(|a, b| a.0.total_cmp(&b.0)); // stable
-            let mut got = v;
-            radix_sort_by_key(&mut got, &mut Vec::new(), |x| f32_order_key(x.0));
+            expected.sort_by(order);
+            let cut = split.min(v.len());
+            let parts = vec![v[..cut].to_vec(), v[cut..].to_vec()];
+            let mut got = Vec::new();
+            bucket_sort_parts(parts, &mut got, key, order);
             let bits = |w: &[(f32, u16)]| w.iter().map(|x| (x.0.to_bits(), x.1)).collect::<Vec<_>>();
             prop_assert_eq!(bits(&got), bits(&expected));
         }
