@@ -13,6 +13,7 @@
 use anyhow::{Context, Result};
 use lodgen::lod::{build_one, BuildOptions, LevelRequest};
 use lodgen::scene::{Primitive, SourceMesh};
+use lodgen_pm::attrfit::barycentric;
 use lodgen_pm::bvh::TriangleBvh;
 use lodgen_pm::levels::LevelSpec;
 use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
@@ -250,20 +251,6 @@ fn interpolate(s: &Surface, t: [u32; 3], w: [f64; 3]) -> ([f64; 2], [f64; 3]) {
         }
     }
     (uv, n)
-}
-
-/// Barycentric coordinates of `q` (on the triangle's plane) in `t`.
-fn barycentric(t: [[f64; 3]; 3], q: [f64; 3]) -> [f64; 3] {
-    let (v0, v1, v2) = (sub(t[1], t[0]), sub(t[2], t[0]), sub(q, t[0]));
-    let (d00, d01, d11) = (dot(v0, v0), dot(v0, v1), dot(v1, v1));
-    let (d20, d21) = (dot(v2, v0), dot(v2, v1));
-    let den = d00 * d11 - d01 * d01;
-    if den.abs() < f64::MIN_POSITIVE {
-        return [1.0, 0.0, 0.0];
-    }
-    let v = (d11 * d20 - d01 * d21) / den;
-    let w = (d00 * d21 - d01 * d20) / den;
-    [1.0 - v - w, v, w]
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

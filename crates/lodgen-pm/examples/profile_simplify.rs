@@ -9,6 +9,7 @@
 use std::time::Instant;
 
 use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
+use lodgen_pm::shapes::subdivide;
 use lodgen_pm::{prepare, Mesh, Schedule, Simplifier, SimplifyOptions};
 
 fn load_obj(path: &str) -> Mesh {
@@ -31,30 +32,6 @@ fn load_obj(path: &str) -> Mesh {
             }
             _ => {}
         }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
-}
-
-/// 4-to-1 midpoint subdivision.
-fn subdivide(m: &Mesh) -> Mesh {
-    let mut positions = m.positions.clone();
-    let mut mid = std::collections::BTreeMap::new();
-    let mut triangles = Vec::with_capacity(4 * m.triangles.len());
-    let mut midpoint = |a: u32, b: u32, positions: &mut Vec<[f32; 3]>| -> u32 {
-        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-            let (p, q) = (positions[a as usize], positions[b as usize]);
-            positions.push([0, 1, 2].map(|k| 0.5 * (p[k] + q[k])));
-            positions.len() as u32 - 1
-        })
-    };
-    for &[a, b, c] in &m.triangles {
-        let ab = midpoint(a, b, &mut positions);
-        let bc = midpoint(b, c, &mut positions);
-        let ca = midpoint(c, a, &mut positions);
-        triangles.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
     }
     Mesh {
         positions,

@@ -452,7 +452,9 @@ pub fn charts(wedge_count: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
 
 /// Barycentric coordinates of `q` (on the triangle's plane) in `t`; the
 /// first corner's for a degenerate triangle.
-fn barycentric(t: [[f64; 3]; 3], q: [f64; 3]) -> [f64; 3] {
+/// Barycentric coordinates of `q` (projected onto the triangle's plane,
+/// clamped into the triangle) in triangle `t`.
+pub fn barycentric(t: [[f64; 3]; 3], q: [f64; 3]) -> [f64; 3] {
     let (v0, v1, v2) = (sub(t[1], t[0]), sub(t[2], t[0]), sub(q, t[0]));
     let (d00, d01, d11) = (dot(v0, v0), dot(v0, v1), dot(v1, v1));
     let (d20, d21) = (dot(v2, v0), dot(v2, v1));

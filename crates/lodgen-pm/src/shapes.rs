@@ -251,3 +251,29 @@ pub fn torus_knot(p: u32, q: u32, n: u32, m: u32, noise: f64) -> Mesh {
         noise,
     )
 }
+
+/// 4-to-1 midpoint subdivision (shared edge midpoints, so the result stays
+/// welded and manifold): the benchmark's ~1M-triangle bunny is the bunny
+/// subdivided twice.
+pub fn subdivide(m: &Mesh) -> Mesh {
+    let mut positions = m.positions.clone();
+    let mut mid: std::collections::BTreeMap<(u32, u32), u32> = Default::default();
+    let mut triangles = Vec::with_capacity(m.triangles.len() * 4);
+    let mut midpoint = |a: u32, b: u32, positions: &mut Vec<[f32; 3]>| {
+        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            let (p, q) = (positions[a as usize], positions[b as usize]);
+            positions.push([0, 1, 2].map(|k| 0.5 * (p[k] + q[k])));
+            positions.len() as u32 - 1
+        })
+    };
+    for &[a, b, c] in &m.triangles {
+        let ab = midpoint(a, b, &mut positions);
+        let bc = midpoint(b, c, &mut positions);
+        let ca = midpoint(c, a, &mut positions);
+        triangles.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
