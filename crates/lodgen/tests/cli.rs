@@ -195,6 +195,7 @@ fn help_explains_every_flag() {
         "--boundary",
         "--boundary-weight",
         "--placement",
+        "--schedule",
         "--uniform-weights",
         "--quantize",
         "--compress",
@@ -312,6 +313,43 @@ fn bunny_and_cow_lod_sets() {
         assert_eq!(counts, expected);
         publish(&[&out, &rep]);
     }
+}
+
+#[test]
+fn both_schedules_build_the_requested_levels() {
+    let d = tmp("schedules");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let mut hashes = Vec::new();
+    for schedule in ["passes", "greedy"] {
+        let rep = d.join(format!("{schedule}.json"));
+        let out = d.join(format!("{schedule}.glb"));
+        let o = lodgen(&[
+            input.to_str().unwrap(),
+            "--schedule",
+            schedule,
+            "--levels",
+            "50%,10%",
+            "-o",
+            out.to_str().unwrap(),
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{schedule}: {}", stderr(&o));
+        let r = report(&rep);
+        let tris: Vec<u64> = r["meshes"][0]["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l["triangles"].as_u64().unwrap())
+            .collect();
+        assert_eq!(tris, vec![1152, 230], "{schedule}");
+        hashes.push(std::fs::read(&out).unwrap());
+    }
+    // the two orders contract different pairs
+    assert_ne!(hashes[0], hashes[1]);
+    let o = lodgen(&[input.to_str().unwrap(), "--schedule", "random"]);
+    assert!(!o.status.success());
 }
 
 #[test]
