@@ -22,9 +22,12 @@
 //!   referenced mesh `m` gets level 0 of `m`'s chain. Animations of node
 //!   transforms are kept (keyframes copied into the non-LOD range; they drive
 //!   the node they target, so in unquantized output the coarser LOD nodes do
-//!   not follow them); `weights` channels, skins and the LOD nodes'
-//!   `skin`/`weights` are dropped since the new meshes have no joints or morph
-//!   targets.
+//!   not follow them). Skins are kept with their inverse bind matrices, and
+//!   every LOD node keeps the `skin` of the node it replaces (the levels
+//!   carry JOINTS_n / WEIGHTS_n), except with `quantize`, whose
+//!   dequantization lives in node transforms that skinning ignores: then
+//!   skins are dropped. `weights` channels and the nodes' morph `weights`
+//!   are dropped since the new meshes have no morph targets.
 //! - With `quantize`, positions are normalized `i16` in a cube around the
 //!   chain's bounding box; the dequantization (translation + uniform scale) is
 //!   the transform of the LOD nodes. For glTF input the LOD nodes are then new
@@ -1288,7 +1291,7 @@ fn add_lod_nodes(
     let mut ids = Vec::with_capacity(meshes.len().saturating_sub(1));
     for (k, &mesh) in meshes.iter().enumerate().skip(1) {
         let mut node = Map::new();
-        for key in ["matrix", "translation", "rotation", "scale"] {
+        for key in ["matrix", "translation", "rotation", "scale", "skin"] {
             if let Some(v) = template.get(key) {
                 node.insert(key.into(), v.clone());
             }
@@ -1405,8 +1408,31 @@ fn gltf_document(
     };
     let in_accessors = take_array(&mut root, "accessors");
     let in_buffer_views = take_array(&mut root, "bufferViews");
-    for key in ["buffers", "meshes", "skins"] {
+    for key in ["buffers", "meshes"] {
         root.remove(key);
+    }
+    // Skins are kept (their inverse bind matrices copied into the non-LOD
+    // range) without quantization: every level carries JOINTS / WEIGHTS.
+    // Quantized positions put the dequantization into node transforms,
+    // which skinning ignores, so quantized output drops skins.
+    let mut skins = take_array(&mut root, "skins");
+    if out.opts.quantize {
+        skins.clear();
+    }
+    for (k, skin) in skins.iter_mut().enumerate() {
+        if let Some(a) = skin.get("inverseBindMatrices").and_then(Value::as_u64) {
+            let copied = copy_accessor(a as usize, &in_accessors, &in_buffer_views, buffers, out)
+                .ok_or_else(|| {
+                input_err(
+                    format!("/skins/{k}/inverseBindMatrices"),
+                    format!("accessor {a} cannot be copied (missing or sparse)"),
+                )
+            })?;
+            skin["inverseBindMatrices"] = copied.into();
+        }
+    }
+    if !skins.is_empty() {
+        root.insert("skins".into(), skins.into());
     }
     // Animations of node transforms are kept with their keyframe data copied
     // into the non-LOD range; `weights` channels (the new meshes have no
@@ -1552,7 +1578,9 @@ fn gltf_document(
             .and_then(Value::as_str)
             .map_or_else(|| chain.name.clone(), String::from);
         if let Some(obj) = nodes[i].as_object_mut() {
-            obj.remove("skin");
+            if quantize {
+                obj.remove("skin");
+            }
             obj.remove("weights");
         }
         if quantize {

@@ -710,3 +710,128 @@ fn single_level_chain_has_no_msft_lod() {
     assert_eq!(json["nodes"].as_array().unwrap().len(), 1);
     gltf::import(&path).unwrap();
 }
+
+/// Inverse bind matrices of the skinned test scene: identity, and a
+/// translation by -1 along y.
+const IBM: [[f32; 16]; 2] = [
+    [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ],
+    [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 1.0,
+    ],
+];
+
+/// A skinned glTF input: Root (joint) → Bone (joint), and a node with mesh 0
+/// and skin 0; the sphere's upper half follows Bone.
+fn skinned_scene() -> (Scene, LodMesh) {
+    let (positions, indices) = icosphere(2, 1.0, [0.0; 3]);
+    let joints = positions.iter().map(|_| [0, 1, 0, 0]).collect();
+    let weights = positions
+        .iter()
+        .map(|p| {
+            let w = (0.5 + 0.5 * p[1]).clamp(0.0, 1.0);
+            [1.0 - w, w, 0.0, 0.0]
+        })
+        .collect();
+    let prim = Primitive {
+        positions,
+        joints: Some(joints),
+        weights: Some(weights),
+        indices,
+        ..Primitive::default()
+    };
+    let doc: gltf_json::Root = serde_json::from_value(serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 2]}],
+        "nodes": [
+            {"name": "Root", "children": [1]},
+            {"name": "Bone", "translation": [0.0, 1.0, 0.0]},
+            {"name": "Skinned", "mesh": 0, "skin": 0}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 1}}]}],
+        "skins": [{"joints": [0, 1], "skeleton": 0, "inverseBindMatrices": 0}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 2, "type": "MAT4"},
+            {"componentType": 5126, "count": 3, "type": "VEC3"}
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 128}],
+        "buffers": [{"byteLength": 128}]
+    }))
+    .unwrap();
+    let data: Vec<u8> = IBM.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let scene = Scene {
+        meshes: vec![SourceMesh {
+            name: "skinned".into(),
+            primitives: vec![prim.clone()],
+        }],
+        materials: Vec::new(),
+        origin: Origin::Gltf {
+            path: "in.gltf".into(),
+            document: Box::new(doc),
+            buffers: vec![data],
+        },
+    };
+    let lod = chain("skinned", 0, prim, &[0.4, 0.1]);
+    (scene, lod)
+}
+
+#[test]
+fn skins_survive_on_every_lod_node_unless_quantized() {
+    let (scene, lod) = skinned_scene();
+    let dir = scratch("skinned");
+    let path = dir.join("skinned.glb");
+    let summary = write_lods(
+        &path,
+        &scene,
+        std::slice::from_ref(&lod),
+        &WriteOptions::default(),
+    )
+    .unwrap();
+    publish("gltf_skinned", &summary);
+    let (json, buffers) = load_raw(&path);
+    let skin = &json["skins"][0];
+    assert_eq!(skin["joints"], serde_json::json!([0, 1]));
+    let ibm = accessor_values(
+        &json,
+        &buffers,
+        skin["inverseBindMatrices"].as_u64().unwrap() as usize,
+    );
+    let want: Vec<Vec<f64>> = IBM
+        .iter()
+        .map(|m| m.iter().map(|&c| c as f64).collect())
+        .collect();
+    assert_eq!(ibm, want);
+    let nodes = json["nodes"].as_array().unwrap();
+    let ids: Vec<usize> = nodes[2]["extensions"]["MSFT_lod"]["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(ids.len(), 2);
+    for n in std::iter::once(2).chain(ids) {
+        assert_eq!(nodes[n]["skin"], 0, "node {n} keeps its skin");
+        let mesh = nodes[n]["mesh"].as_u64().unwrap() as usize;
+        let attributes = &json["meshes"][mesh]["primitives"][0]["attributes"];
+        assert!(attributes.get("JOINTS_0").is_some() && attributes.get("WEIGHTS_0").is_some());
+    }
+    check_round_trip(&path, &lod);
+
+    // quantized: the dequantization is a node transform, which skinning
+    // ignores, so the skin goes
+    let path = dir.join("skinned_q.glb");
+    let opts = WriteOptions {
+        quantize: true,
+        compression: Compression::None,
+    };
+    write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
+    let (json, _) = load_raw(&path);
+    assert!(json.get("skins").is_none());
+    assert!(json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|n| n.get("skin").is_none()));
+}

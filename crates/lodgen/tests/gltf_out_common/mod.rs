@@ -213,6 +213,8 @@ pub fn accessor_values(json: &Value, buffers: &[Vec<u8>], accessor: usize) -> Ve
         "SCALAR" => 1,
         "VEC2" => 2,
         "VEC3" => 3,
+        "VEC4" => 4,
+        "MAT4" => 16,
         t => panic!("type {t}"),
     };
     let ctype = a["componentType"].as_u64().unwrap();
