@@ -403,7 +403,11 @@ impl Simplifier {
 
     /// The contraction target and cost of the pair `(a, b)`.
     fn target_of(&self, a: u32, b: u32) -> (DVec3, f64) {
-        let q = self.quadric[a as usize] + self.quadric[b as usize];
+        self.target_with(&(self.quadric[a as usize] + self.quadric[b as usize]), a, b)
+    }
+
+    /// [`Simplifier::target_of`] with the pair's summed quadric `q` given.
+    fn target_with(&self, q: &Quadric, a: u32, b: u32) -> (DVec3, f64) {
         let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
         match (self.locked[a as usize], self.locked[b as usize]) {
             (true, _) => (pa, q.eval(pa)),
@@ -811,9 +815,9 @@ impl Simplifier {
     /// Re-cost the pair `(a, b)` (exact: its vertices are current) and
     /// contract it if it is within `max_error` and legal.
     fn try_contract(&mut self, a: u32, b: u32) -> Result<(), Rejected> {
-        let (p, cost) = self.target_of(a, b);
         let (ai, bi) = (a as usize, b as usize);
         let q = self.quadric[ai] + self.quadric[bi];
+        let (p, cost) = self.target_with(&q, a, b);
         let error = if q.weight > 0.0 {
             (cost / q.weight).sqrt()
         } else {

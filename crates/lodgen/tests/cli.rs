@@ -53,6 +53,16 @@ fn write_torus_obj(path: &Path) {
     std::fs::write(path, s).unwrap();
 }
 
+/// Triangle count of each level of the first mesh in a `--report`.
+fn level_triangles(r: &serde_json::Value) -> Vec<u64> {
+    r["meshes"][0]["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect()
+}
+
 fn report(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
@@ -336,13 +346,7 @@ fn both_schedules_build_the_requested_levels() {
             rep.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{schedule}: {}", stderr(&o));
-        let r = report(&rep);
-        let tris: Vec<u64> = r["meshes"][0]["levels"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|l| l["triangles"].as_u64().unwrap())
-            .collect();
+        let tris = level_triangles(&report(&rep));
         assert_eq!(tris, vec![1152, 230], "{schedule}");
         hashes.push(std::fs::read(&out).unwrap());
     }
@@ -371,13 +375,7 @@ fn every_method_builds_levels() {
             rep.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{method}: {}", stderr(&o));
-        let r = report(&rep);
-        let tris: Vec<u64> = r["meshes"][0]["levels"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|l| l["triangles"].as_u64().unwrap())
-            .collect();
+        let tris = level_triangles(&report(&rep));
         assert_eq!(tris.len(), 2, "{method}");
         assert!(tris[0] <= 1152 && tris[0] > tris[1], "{method}: {tris:?}");
     }
