@@ -13,7 +13,9 @@
 // Checks: the page decodes the stream from several Range chunks and shows
 // records before the last chunk has arrived; after k records (each level's
 // count, refining and coarsening) the viewer's triangle count and index-buffer
-// hash equal the expected ones; the screen-coverage mode picks a coarser level
+// hash equal the expected ones, and with attributes (EXPECT's "channels" and
+// each level's "attributeHash") so does the hash of every corner's streamed
+// attribute values; the screen-coverage mode picks a coarser level
 // when the camera moves away; no page or console errors. Writes
 // DIR/viewer-<level>.png for the finest, a middle and the coarsest level
 // (default DIR: target/test-out) and checks each is not blank (luminance
@@ -149,11 +151,26 @@ async function main() {
     for (const lv of order) {
       const got = await page.evaluate((k) => {
         const applied = window.lodgen.refineTo(k);
-        return { applied, triangles: window.lodgen.triangles(), hash: window.lodgen.indexHash() };
+        return {
+          applied, triangles: window.lodgen.triangles(), hash: window.lodgen.indexHash(),
+          attr: window.lodgen.attributeHash(),
+        };
       }, lv.records);
       check(got.applied === lv.records && got.triangles === lv.triangles && got.hash === lv.indexHash,
         `after ${lv.records} records: ${got.triangles} triangles, hash ${got.hash} ` +
           `(expected ${lv.triangles}, ${lv.indexHash})`);
+      if (lv.attributeHash !== undefined) {
+        check(got.attr === lv.attributeHash,
+          `after ${lv.records} records: corner attribute hash ${got.attr} (expected ${lv.attributeHash})`);
+      }
+    }
+    const channels = await page.evaluate(() => window.lodgen.channels());
+    const want = expect.channels || [];
+    check(JSON.stringify(channels) === JSON.stringify(want),
+      `streamed attributes: [${channels.join(', ')}] (expected [${want.join(', ')}])`);
+    if (want.includes('TEXCOORD_0')) {
+      const modes = await page.evaluate(() => window.lodgen.shadingModes());
+      check(modes.includes('uv checker'), `UV checker shading offered (${modes.join(', ')})`);
     }
 
     // screen-coverage mode: far away → a coarser level (or culled) than near

@@ -37,7 +37,7 @@
 //! decoded as 0).
 
 use crate::mesh::Mesh;
-use crate::vsplit::{Corner, ProgressiveMesh, VertexSplit};
+use crate::vsplit::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 use smallvec::SmallVec;
 use thiserror::Error;
 
@@ -47,6 +47,16 @@ pub const MAGIC: [u8; 4] = *b"LGPM";
 pub const VERSION: u8 = 1;
 /// Header flag: every record ends with its `error` as `f32` LE.
 pub const FLAG_ERRORS: u8 = 1;
+/// Header flag: the stream carries wedges (attributes per corner): a wedge
+/// table in the header, the base corners' wedges, and each record's face
+/// and corner-edit wedges, each new wedge with its values inline.
+pub const FLAG_WEDGES: u8 = 2;
+/// Longest channel name (bytes) and most components per channel a stream
+/// may declare.
+pub const MAX_CHANNEL_NAME: usize = 64;
+pub const MAX_COMPONENTS: u8 = 16;
+/// Most channels a stream may declare.
+pub const MAX_CHANNELS: usize = 64;
 /// Bound on preallocation from header counts, so a hostile header cannot
 /// make the decoder reserve gigabytes before any data arrives.
 const MAX_PREALLOC: usize = 1 << 20;
@@ -101,6 +111,126 @@ pub enum StreamError {
     TrailingBytes(usize),
 }
 
+/// Why [`encode_with_attributes`] refused its input (a caller's mistake,
+/// not a stream's).
+#[derive(Debug, Error, Clone, PartialEq, Eq)]
+pub enum EncodeError {
+    #[error("the progressive mesh has no wedge log (it was not simplified with wedges)")]
+    NoWedges,
+    #[error("channel {index}: {what}")]
+    Channel { index: usize, what: String },
+    #[error("{values} attribute values are not a whole number of wedges of {stride}")]
+    Values { values: usize, stride: usize },
+    #[error("{groups} groups given for {wedges} wedges")]
+    Groups { groups: usize, wedges: usize },
+    #[error("wedge {wedge} is used by the log but has no values ({wedges} wedges given)")]
+    WedgeOutOfRange { wedge: u32, wedges: usize },
+}
+
+/// One attribute every wedge of a stream carries: its name (lodgen writes
+/// glTF semantics: `NORMAL`, `TEXCOORD_0`, …) and its component count.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Channel {
+    pub name: String,
+    pub components: u8,
+}
+
+/// The attribute values of every wedge: what [`encode_with_attributes`]
+/// takes (indexed by the log's wedge ids) and what the decoder yields
+/// (indexed by the stream's wedge numbering, order of first appearance).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WedgeAttributes {
+    pub channels: Vec<Channel>,
+    /// Wedge-major: wedge `w`'s values are `values[w · stride ..][..stride]`,
+    /// channels in order.
+    pub values: Vec<f32>,
+    /// Group of each wedge (lodgen: the primitive, hence the material);
+    /// empty means every wedge is in group 0.
+    pub groups: Vec<u32>,
+    /// Number of wedges (needed when there are no channels).
+    pub count: usize,
+}
+
+impl WedgeAttributes {
+    /// Values per wedge: the channels' components summed.
+    pub fn stride(&self) -> usize {
+        self.channels
+            .iter()
+            .map(|c| usize::from(c.components))
+            .sum()
+    }
+
+    /// Wedge `w`'s values.
+    pub fn wedge(&self, w: u32) -> &[f32] {
+        let s = self.stride();
+        &self.values[w as usize * s..][..s]
+    }
+
+    /// Wedge `w`'s group.
+    pub fn group(&self, w: u32) -> u32 {
+        self.groups.get(w as usize).copied().unwrap_or(0)
+    }
+
+    /// Where channel `name` starts in a wedge's values, and its size.
+    pub fn channel(&self, name: &str) -> Option<(usize, usize)> {
+        let mut at = 0;
+        for c in &self.channels {
+            if c.name == name {
+                return Some((at, usize::from(c.components)));
+            }
+            at += usize::from(c.components);
+        }
+        None
+    }
+
+    fn check(&self) -> Result<(), EncodeError> {
+        if self.channels.len() > MAX_CHANNELS {
+            return Err(EncodeError::Channel {
+                index: MAX_CHANNELS,
+                what: format!("more than {MAX_CHANNELS} channels"),
+            });
+        }
+        for (index, c) in self.channels.iter().enumerate() {
+            if c.name.is_empty() || c.name.len() > MAX_CHANNEL_NAME {
+                return Err(EncodeError::Channel {
+                    index,
+                    what: format!("name of {} bytes (1..={MAX_CHANNEL_NAME})", c.name.len()),
+                });
+            }
+            if !(1..=MAX_COMPONENTS).contains(&c.components) {
+                return Err(EncodeError::Channel {
+                    index,
+                    what: format!("{} components (1..={MAX_COMPONENTS})", c.components),
+                });
+            }
+        }
+        let stride = self.stride();
+        if self.values.len() != self.count * stride {
+            return Err(EncodeError::Values {
+                values: self.values.len(),
+                stride,
+            });
+        }
+        if !self.groups.is_empty() && self.groups.len() != self.count {
+            return Err(EncodeError::Groups {
+                groups: self.groups.len(),
+                wedges: self.count,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The wedge part of a header (present with [`FLAG_WEDGES`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WedgeLayout {
+    /// Wedges the whole stream defines.
+    pub total: usize,
+    /// Groups are `0 .. groups`; with one group none is stored.
+    pub groups: u32,
+    pub channels: Vec<Channel>,
+}
+
 fn invalid(offset: usize, what: impl Into<String>) -> StreamError {
     StreamError::Invalid {
         offset,
@@ -125,6 +255,8 @@ pub struct StreamHeader {
     /// Record counts, in the order given to [`encode`], each reproducing
     /// one chosen level exactly.
     pub levels: Vec<usize>,
+    /// The wedge table, when the stream carries attributes.
+    pub wedges: Option<WedgeLayout>,
 }
 
 impl StreamHeader {
@@ -203,17 +335,107 @@ fn grid(pm: &ProgressiveMesh, bits: u8) -> ([f32; 3], f32) {
     (lo, step)
 }
 
-/// Encode `pm` with `levels` (record counts, each clamped to `pm.len()`).
+/// Encode `pm` with `levels` (record counts, each clamped to `pm.len()`):
+/// positions and topology only, whether or not `pm` has a wedge log (see
+/// [`encode_with_attributes`]).
 ///
 /// Non-finite coordinates cannot be represented: they are snapped onto the
 /// grid (NaN to its origin). Meshes from [`crate::simplify`] never have them.
 pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Vec<u8> {
+    encode_inner(pm, levels, opts, None)
+}
+
+/// [`encode`], plus every corner's wedge and every wedge's attribute values,
+/// so a client refining the stream draws each step with the input's own
+/// attributes (a fully refined stream has exactly the input's values at
+/// every corner). `attributes` is indexed by the log's wedge ids
+/// (`pm.wedges`; for [`crate::simplify_with_wedges`], the input vertex
+/// indices). Values are stored as `f32`, exactly; each wedge once, where it
+/// is first used.
+pub fn encode_with_attributes(
+    pm: &ProgressiveMesh,
+    levels: &[usize],
+    opts: EncodeOptions,
+    attributes: &WedgeAttributes,
+) -> Result<Vec<u8>, EncodeError> {
+    let log = pm.wedges.as_ref().ok_or(EncodeError::NoWedges)?;
+    attributes.check()?;
+    let used = log
+        .base
+        .iter()
+        .flatten()
+        .chain(log.splits.iter().flat_map(|s| {
+            s.faces
+                .iter()
+                .flatten()
+                .chain(s.corners.iter().map(|c| &c[1]))
+        }));
+    let mut seen = vec![false; attributes.count];
+    let mut total = 0usize;
+    for &w in used {
+        let slot = seen
+            .get_mut(w as usize)
+            .ok_or(EncodeError::WedgeOutOfRange {
+                wedge: w,
+                wedges: attributes.count,
+            })?;
+        if !*slot {
+            *slot = true;
+            total += 1;
+        }
+    }
+    Ok(encode_inner(
+        pm,
+        levels,
+        opts,
+        Some((log, attributes, total)),
+    ))
+}
+
+/// Writes wedge references: `0` plus the wedge's group and values when it
+/// is new, else `count − id`.
+struct WedgeWriter<'a> {
+    attributes: &'a WedgeAttributes,
+    groups: u32,
+    /// Log wedge id → stream id + 1 (0 = not yet written).
+    ids: Vec<u32>,
+    count: u32,
+}
+
+impl WedgeWriter<'_> {
+    fn put(&mut self, out: &mut Vec<u8>, w: u32) {
+        let id = &mut self.ids[w as usize];
+        if *id == 0 {
+            put_varint(out, 0);
+            if self.groups > 1 {
+                put_varint(out, u64::from(self.attributes.group(w)));
+            }
+            for &v in self.attributes.wedge(w) {
+                put_f32(out, v);
+            }
+            self.count += 1;
+            *id = self.count;
+        } else {
+            put_varint(out, u64::from(self.count + 1 - *id));
+        }
+    }
+}
+
+fn encode_inner(
+    pm: &ProgressiveMesh,
+    levels: &[usize],
+    opts: EncodeOptions,
+    wedges: Option<(&WedgeLog, &WedgeAttributes, usize)>,
+) -> Vec<u8> {
     let bits = opts.bits.clamp(1, 30);
     let (origin, step) = grid(pm, bits);
     let total_triangles =
         pm.base.triangles.len() + pm.splits.iter().map(|s| s.faces.len()).sum::<usize>();
+    let groups = wedges.map_or(1, |(_, a, _)| {
+        a.groups.iter().max().map_or(1, |&g| g.saturating_add(1))
+    });
     let header = StreamHeader {
-        flags: if opts.errors { FLAG_ERRORS } else { 0 },
+        flags: u8::from(opts.errors) * FLAG_ERRORS + u8::from(wedges.is_some()) * FLAG_WEDGES,
         bits,
         origin,
         step,
@@ -223,6 +445,11 @@ pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Ve
         total_vertices: pm.base.positions.len() + pm.splits.len(),
         total_triangles,
         levels: levels.iter().map(|&k| k.min(pm.splits.len())).collect(),
+        wedges: wedges.map(|(_, a, total)| WedgeLayout {
+            total,
+            groups,
+            channels: a.channels.clone(),
+        }),
     };
     let mut out = Vec::with_capacity(64 + 12 * header.total_vertices + 8 * total_triangles);
     out.extend_from_slice(&MAGIC);
@@ -246,6 +473,27 @@ pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Ve
     for &k in &header.levels {
         put_varint(&mut out, k as u64);
     }
+    if let Some(layout) = &header.wedges {
+        put_varint(&mut out, layout.total as u64);
+        put_varint(&mut out, u64::from(layout.groups));
+        put_varint(&mut out, layout.channels.len() as u64);
+        for c in &layout.channels {
+            put_varint(&mut out, c.name.len() as u64);
+            out.extend_from_slice(c.name.as_bytes());
+            out.push(c.components);
+        }
+    }
+    let mut ww = wedges.map(|(log, a, _)| {
+        (
+            log,
+            WedgeWriter {
+                attributes: a,
+                groups,
+                ids: vec![0; a.count],
+                count: 0,
+            },
+        )
+    });
 
     // base mesh
     let mut q: Vec<[u32; 3]> = Vec::with_capacity(header.total_vertices);
@@ -263,6 +511,11 @@ pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Ve
         for &c in t {
             put_zz(&mut out, i64::from(c) - i64::from(prev));
             prev = c;
+        }
+    }
+    if let Some((log, w)) = &mut ww {
+        for &c in log.base.iter().flatten() {
+            w.put(&mut out, c);
         }
     }
 
@@ -307,6 +560,15 @@ pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Ve
             let gap = prev - 1 - u64::from(c.triangle);
             put_varint(&mut out, (gap << 2) | u64::from(c.slot));
             prev = u64::from(c.triangle) + 1;
+        }
+        if let Some((log, w)) = &mut ww {
+            let sw = &log.splits[i];
+            for &c in sw.faces.iter().flatten() {
+                w.put(&mut out, c);
+            }
+            for c in sw.corners.iter().rev() {
+                w.put(&mut out, c[1]);
+            }
         }
         if opts.errors {
             put_f32(&mut out, s.error);
@@ -402,7 +664,7 @@ fn parse_header(r: &mut Reader) -> Result<StreamHeader, ReadError> {
     }
     let at = r.offset();
     let flags = r.byte()?;
-    if flags & !FLAG_ERRORS != 0 {
+    if flags & !(FLAG_ERRORS | FLAG_WEDGES) != 0 {
         return Err(invalid(at, format!("unknown flags {flags:#04x}")).into());
     }
     let at = r.offset();
@@ -441,6 +703,45 @@ fn parse_header(r: &mut Reader) -> Result<StreamHeader, ReadError> {
     for _ in 0..level_count {
         levels.push(r.bounded(split_count as u64, "level record count")? as usize);
     }
+    let wedges = if flags & FLAG_WEDGES != 0 {
+        let total = r.bounded(max, "wedge count")? as usize;
+        let at = r.offset();
+        let groups = r.bounded(max, "group count")? as u32;
+        if groups == 0 {
+            return Err(invalid(at, "zero wedge groups").into());
+        }
+        let n = r.bounded(MAX_CHANNELS as u64, "channel count")? as usize;
+        let mut channels = Vec::with_capacity(n);
+        for _ in 0..n {
+            let at = r.offset();
+            let len = r.bounded(MAX_CHANNEL_NAME as u64, "channel name length")? as usize;
+            let mut name = Vec::with_capacity(len);
+            for _ in 0..len {
+                name.push(r.byte()?);
+            }
+            let name = String::from_utf8(name)
+                .ok()
+                .filter(|n| !n.is_empty())
+                .ok_or_else(|| invalid(at, "channel name empty or not UTF-8"))?;
+            let at = r.offset();
+            let components = r.byte()?;
+            if !(1..=MAX_COMPONENTS).contains(&components) {
+                return Err(invalid(
+                    at,
+                    format!("{components} components (1..={MAX_COMPONENTS})"),
+                )
+                .into());
+            }
+            channels.push(Channel { name, components });
+        }
+        Some(WedgeLayout {
+            total,
+            groups,
+            channels,
+        })
+    } else {
+        None
+    };
     Ok(StreamHeader {
         flags,
         bits,
@@ -452,6 +753,7 @@ fn parse_header(r: &mut Reader) -> Result<StreamHeader, ReadError> {
         total_vertices,
         total_triangles,
         levels,
+        wedges,
     })
 }
 
@@ -460,6 +762,75 @@ fn parse_header(r: &mut Reader) -> Result<StreamHeader, ReadError> {
 struct State {
     q: Vec<[u32; 3]>,
     mesh: Mesh,
+    wedges: Option<WedgeState>,
+}
+
+/// The decoder's wedges: every current corner's, and every wedge's values.
+#[derive(Clone, Debug, Default)]
+struct WedgeState {
+    corners: Vec<[u32; 3]>,
+    attributes: WedgeAttributes,
+}
+
+/// Wedges met while parsing one piece (base or record), committed with it.
+#[derive(Clone, Debug, Default)]
+struct NewWedges {
+    /// Wedges defined before this piece.
+    start: usize,
+    values: Vec<f32>,
+    groups: Vec<u32>,
+}
+
+impl NewWedges {
+    /// Wedges defined so far, this piece's included (each new wedge
+    /// pushes one group).
+    fn count(&self) -> usize {
+        self.start + self.groups.len()
+    }
+
+    /// One wedge reference: `0` = a new wedge (its group when there are
+    /// several, then its values), `k ≥ 1` = wedge `count − k`.
+    fn read(&mut self, r: &mut Reader, layout: &WedgeLayout) -> Result<u32, ReadError> {
+        let at = r.offset();
+        let count = self.count();
+        let code = r.bounded(count as u64, "wedge reference")?;
+        if code > 0 {
+            return Ok((count as u64 - code) as u32);
+        }
+        if count >= layout.total {
+            return Err(invalid(
+                at,
+                format!("more wedges than the {} announced", layout.total),
+            )
+            .into());
+        }
+        let group = if layout.groups > 1 {
+            r.bounded(u64::from(layout.groups) - 1, "wedge group")? as u32
+        } else {
+            0
+        };
+        self.groups.push(group);
+        for c in &layout.channels {
+            for _ in 0..c.components {
+                self.values.push(r.f32()?);
+            }
+        }
+        Ok(count as u32)
+    }
+
+    fn commit(self, a: &mut WedgeAttributes) {
+        a.values.extend_from_slice(&self.values);
+        a.count += self.groups.len();
+        a.groups.extend_from_slice(&self.groups);
+    }
+}
+
+/// The wedge part of one parsed record.
+struct RecordWedges {
+    faces: SmallVec<[[u32; 3]; 2]>,
+    /// Parallel to the split's (ascending) corners: the wedge after.
+    after: Vec<u32>,
+    new: NewWedges,
 }
 
 fn grid_coord(h: &StreamHeader, at: usize, v: i64) -> Result<u32, StreamError> {
@@ -501,6 +872,29 @@ fn parse_base(r: &mut Reader, h: &StreamHeader) -> Result<State, ReadError> {
         }
         triangles.push(t);
     }
+    let wedges = match &h.wedges {
+        Some(layout) => {
+            let mut new = NewWedges::default();
+            let mut corners = Vec::with_capacity(h.total_triangles.min(MAX_PREALLOC));
+            for _ in 0..h.base_triangles {
+                corners.push([
+                    new.read(r, layout)?,
+                    new.read(r, layout)?,
+                    new.read(r, layout)?,
+                ]);
+            }
+            let mut attributes = WedgeAttributes {
+                channels: layout.channels.clone(),
+                ..WedgeAttributes::default()
+            };
+            new.commit(&mut attributes);
+            Some(WedgeState {
+                corners,
+                attributes,
+            })
+        }
+        None => None,
+    };
     let mut positions = Vec::with_capacity(h.total_vertices.min(MAX_PREALLOC));
     positions.extend(q.iter().map(|&p| h.dequantize(p)));
     Ok(State {
@@ -509,16 +903,20 @@ fn parse_base(r: &mut Reader, h: &StreamHeader) -> Result<State, ReadError> {
             positions,
             triangles,
         },
+        wedges,
     })
 }
 
-/// Parse one record against `state` without changing it; `Ok` carries the
-/// split and its new quantized positions.
-fn parse_record(
-    r: &mut Reader,
-    h: &StreamHeader,
-    state: &State,
-) -> Result<(VertexSplit, [u32; 3], [u32; 3]), ReadError> {
+/// One parsed record: the split, its new quantized positions, its wedges.
+struct Record {
+    split: VertexSplit,
+    q1: [u32; 3],
+    q0: [u32; 3],
+    wedges: Option<RecordWedges>,
+}
+
+/// Parse one record against `state` without changing it.
+fn parse_record(r: &mut Reader, h: &StreamHeader, state: &State) -> Result<Record, ReadError> {
     let v0 = state.mesh.positions.len() as u32;
     let at = r.offset();
     let head = r.varint()?;
@@ -588,6 +986,33 @@ fn parse_record(
         prev = t + 1;
     }
     corners.reverse();
+    let wedges = match (&h.wedges, &state.wedges) {
+        (Some(layout), Some(ws)) => {
+            let mut new = NewWedges {
+                start: ws.attributes.count,
+                ..NewWedges::default()
+            };
+            let mut wf = SmallVec::with_capacity(nf);
+            for _ in 0..nf {
+                wf.push([
+                    new.read(r, layout)?,
+                    new.read(r, layout)?,
+                    new.read(r, layout)?,
+                ]);
+            }
+            let mut after = Vec::with_capacity(nc);
+            for _ in 0..nc {
+                after.push(new.read(r, layout)?);
+            }
+            after.reverse();
+            Some(RecordWedges {
+                faces: wf,
+                after,
+                new,
+            })
+        }
+        _ => None,
+    };
     let error = if h.flags & FLAG_ERRORS != 0 {
         r.f32()?
     } else {
@@ -622,10 +1047,43 @@ fn parse_record(
         corners: SmallVec::from_vec(corners),
         error,
     };
-    Ok((split, q1, q0))
+    Ok(Record {
+        split,
+        q1,
+        q0,
+        wedges,
+    })
 }
 
-fn apply(state: &mut State, s: &VertexSplit, q1: [u32; 3], q0: [u32; 3]) {
+/// Apply a parsed record; returns its wedge edits (with the wedges before).
+fn apply(state: &mut State, rec: Record) -> (VertexSplit, Option<SplitWedges>) {
+    let Record {
+        split: s,
+        q1,
+        q0,
+        wedges,
+    } = rec;
+    let split_wedges = match (wedges, state.wedges.as_mut()) {
+        (Some(w), Some(ws)) => {
+            ws.corners.extend_from_slice(&w.faces);
+            let corners = s
+                .corners
+                .iter()
+                .zip(&w.after)
+                .map(|(c, &after)| {
+                    let cw = &mut ws.corners[c.triangle as usize][c.slot as usize];
+                    let before = std::mem::replace(cw, after);
+                    [before, after]
+                })
+                .collect();
+            w.new.commit(&mut ws.attributes);
+            Some(SplitWedges {
+                faces: w.faces,
+                corners,
+            })
+        }
+        _ => None,
+    };
     state.q[s.v1 as usize] = q1;
     state.q.push(q0);
     state.mesh.positions[s.v1 as usize] = s.p1;
@@ -634,6 +1092,7 @@ fn apply(state: &mut State, s: &VertexSplit, q1: [u32; 3], q0: [u32; 3]) {
     for c in &s.corners {
         state.mesh.triangles[c.triangle as usize][c.slot as usize] = s.v0;
     }
+    (s, split_wedges)
 }
 
 /// Decodes a stream fed in pieces of any size: the header and base mesh as
@@ -662,6 +1121,10 @@ pub struct StreamDecoder {
     base: Option<Mesh>,
     state: State,
     splits: Vec<VertexSplit>,
+    /// The base corners' wedges and each record's wedge edits, when the
+    /// stream has wedges.
+    base_wedges: Vec<[u32; 3]>,
+    split_wedges: Vec<SplitWedges>,
     /// First error: the decoder refuses further input after it.
     failed: Option<StreamError>,
 }
@@ -720,6 +1183,9 @@ impl StreamDecoder {
             match parse_base(&mut r, h) {
                 Ok(state) => {
                     self.base = Some(state.mesh.clone());
+                    if let Some(w) = &state.wedges {
+                        self.base_wedges = w.corners.clone();
+                    }
                     self.state = state;
                 }
                 // the base is taken in one piece: wait for all of it
@@ -740,14 +1206,25 @@ impl StreamDecoder {
                             h.total_triangles
                         ),
                     ));
+                } else if let (Some(layout), Some(ws)) = (&h.wedges, &self.state.wedges) {
+                    if ws.attributes.count != layout.total {
+                        result = Err(invalid(
+                            r.offset(),
+                            format!(
+                                "the records define {} wedges, the header announced {}",
+                                ws.attributes.count, layout.total
+                            ),
+                        ));
+                    }
                 }
                 break;
             }
             let mark = r.pos;
             match parse_record(&mut r, h, &self.state) {
-                Ok((s, q1, q0)) => {
-                    apply(&mut self.state, &s, q1, q0);
+                Ok(rec) => {
+                    let (s, w) = apply(&mut self.state, rec);
                     self.splits.push(s);
+                    self.split_wedges.extend(w);
                 }
                 Err(ReadError::NeedMore) => {
                     r.pos = mark;
@@ -785,6 +1262,18 @@ impl StreamDecoder {
         &self.state.mesh
     }
 
+    /// The wedge of every corner of [`Self::mesh`], when the stream carries
+    /// wedges (stream numbering: order of first appearance).
+    pub fn wedges(&self) -> Option<&[[u32; 3]]> {
+        self.state.wedges.as_ref().map(|w| w.corners.as_slice())
+    }
+
+    /// The values of every wedge decoded so far, when the stream carries
+    /// wedges: wedge `w` of [`Self::wedges`] has `attributes().wedge(w)`.
+    pub fn attributes(&self) -> Option<&WedgeAttributes> {
+        self.state.wedges.as_ref().map(|w| &w.attributes)
+    }
+
     /// Header, base and every announced record decoded, nothing left over.
     pub fn is_complete(&self) -> bool {
         self.failed.is_none()
@@ -799,6 +1288,13 @@ impl StreamDecoder {
     /// `vertex_origin` and `triangle_origin` are the identity (the stream
     /// does not carry the input's numbering).
     pub fn finish(self) -> Result<(ProgressiveMesh, Vec<usize>), StreamError> {
+        self.finish_with_attributes().map(|d| (d.pm, d.levels))
+    }
+
+    /// [`Self::finish`], with the wedge values when the stream has them
+    /// (`pm.wedges` then holds every corner's wedge at every step, in the
+    /// stream's numbering).
+    pub fn finish_with_attributes(self) -> Result<Decoded, StreamError> {
         if let Some(e) = self.failed {
             return Err(e);
         }
@@ -813,12 +1309,29 @@ impl StreamDecoder {
             splits: self.splits,
             vertex_origin: (0..h.total_vertices as u32).collect(),
             triangle_origin: (0..h.total_triangles as u32).collect(),
-            // the stream carries positions and topology only (see
-            // docs/LODGEN_progressive.md)
-            wedges: None,
+            wedges: h.wedges.as_ref().map(|_| WedgeLog {
+                base: self.base_wedges,
+                splits: self.split_wedges,
+            }),
         };
-        Ok((pm, h.levels))
+        Ok(Decoded {
+            pm,
+            levels: h.levels,
+            attributes: self.state.wedges.map(|w| w.attributes),
+        })
     }
+}
+
+/// A whole decoded stream.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decoded {
+    /// Positions on the grid, exact topology, and the wedge log when the
+    /// stream carries wedges.
+    pub pm: ProgressiveMesh,
+    /// Record count of each level, as encoded.
+    pub levels: Vec<usize>,
+    /// Every wedge's values (indexed like `pm.wedges`), when carried.
+    pub attributes: Option<WedgeAttributes>,
 }
 
 /// Decode a whole stream: the progressive mesh (positions on the grid) and
@@ -827,6 +1340,14 @@ pub fn decode(bytes: &[u8]) -> Result<(ProgressiveMesh, Vec<usize>), StreamError
     let mut d = StreamDecoder::new();
     d.push(bytes)?;
     d.finish()
+}
+
+/// Decode a whole stream with its attributes (see
+/// [`StreamDecoder::finish_with_attributes`]).
+pub fn decode_with_attributes(bytes: &[u8]) -> Result<Decoded, StreamError> {
+    let mut d = StreamDecoder::new();
+    d.push(bytes)?;
+    d.finish_with_attributes()
 }
 
 /// Decode only the header (for sizing before the rest arrives).

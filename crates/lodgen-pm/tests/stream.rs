@@ -5,8 +5,11 @@
 
 mod common;
 use lodgen_pm::shapes::{cube, grid, icosphere, torus_knot};
-use lodgen_pm::stream::{decode, decode_header, encode, EncodeOptions, StreamDecoder, StreamError};
-use lodgen_pm::{simplify, Mesh, ProgressiveMesh, SimplifyOptions, Tau};
+use lodgen_pm::stream::{
+    decode, decode_header, decode_with_attributes, encode, encode_with_attributes, Channel,
+    EncodeError, EncodeOptions, StreamDecoder, StreamError, WedgeAttributes,
+};
+use lodgen_pm::{simplify, simplify_with_wedges, Mesh, ProgressiveMesh, SimplifyOptions, Tau};
 use proptest::prelude::*;
 
 fn pm_of(mesh: &Mesh, opts: SimplifyOptions) -> ProgressiveMesh {
@@ -306,5 +309,280 @@ fn bunny_stream_is_within_the_size_target() {
             dec.mesh_at_splits(k).triangles,
             pm.mesh_at_splits(k).triangles
         );
+    }
+}
+
+// ------------------------------------------------------------ wedges
+
+/// An icosphere cut into its eight octants as charts: each octant has its
+/// own copy of the vertices on its border (UV seams), a normal and a
+/// chart-dependent UV per copy; octants alternate between two groups when
+/// `grouped`. Returns positions, indices, and the attributes per vertex.
+fn charted_sphere(subdivisions: u32, grouped: bool) -> (Vec<[f32; 3]>, Vec<u32>, WedgeAttributes) {
+    let m = icosphere(subdivisions);
+    let mut ids = std::collections::BTreeMap::new();
+    let (mut pos, mut idx, mut values, mut groups) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for tri in &m.triangles {
+        let c: [f32; 3] = [0, 1, 2].map(|a| tri.iter().map(|&v| m.positions[v as usize][a]).sum());
+        let chart = u32::from(c[0] > 0.0) | u32::from(c[1] > 0.0) << 1 | u32::from(c[2] > 0.0) << 2;
+        for &v in tri {
+            let id = *ids.entry((chart, v)).or_insert_with(|| {
+                let p = m.positions[v as usize];
+                let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                pos.push(p);
+                values.extend_from_slice(&[p[0] / n, p[1] / n, p[2] / n]);
+                values.extend_from_slice(&[
+                    0.25 * chart as f32 + 0.1 * p[0],
+                    0.5 + 0.3 * p[1] - 0.2 * p[2],
+                ]);
+                groups.push(if grouped { chart % 2 } else { 0 });
+                pos.len() as u32 - 1
+            });
+            idx.push(id);
+        }
+    }
+    let count = pos.len();
+    let attrs = WedgeAttributes {
+        channels: vec![
+            Channel {
+                name: "NORMAL".into(),
+                components: 3,
+            },
+            Channel {
+                name: "TEXCOORD_0".into(),
+                components: 2,
+            },
+        ],
+        values,
+        groups: if grouped { groups } else { Vec::new() },
+        count,
+    };
+    (pos, idx, attrs)
+}
+
+fn wedged(subdivisions: u32, grouped: bool, target: usize) -> (ProgressiveMesh, WedgeAttributes) {
+    let (pos, idx, attrs) = charted_sphere(subdivisions, grouped);
+    let pm = simplify_with_wedges(
+        &pos,
+        &idx,
+        &attrs.values,
+        attrs.stride(),
+        &SimplifyOptions::DEFAULT.with_target_triangles(target),
+    )
+    .expect("valid mesh")
+    .pm;
+    (pm, attrs)
+}
+
+/// Every corner of `a` (log numbering, values in `va`) and `b` (stream
+/// numbering, values in `vb`) has bit-identical attribute values and group.
+fn assert_same_corner_values(
+    k: usize,
+    a: (&[[u32; 3]], &WedgeAttributes),
+    b: (&[[u32; 3]], &WedgeAttributes),
+) {
+    assert_eq!(a.0.len(), b.0.len(), "corner count at k = {k}");
+    for (t, (wa, wb)) in a.0.iter().zip(b.0).enumerate() {
+        for s in 0..3 {
+            let (x, y) = (a.1.wedge(wa[s]), b.1.wedge(wb[s]));
+            assert!(
+                x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()),
+                "k = {k}, triangle {t} corner {s}: {x:?} vs {y:?}"
+            );
+            assert_eq!(
+                a.1.group(wa[s]),
+                b.1.group(wb[s]),
+                "group at k = {k}, triangle {t}"
+            );
+        }
+    }
+}
+
+#[test]
+fn wedged_stream_replays_every_corner_attribute_exactly() {
+    for grouped in [false, true] {
+        let (pm, attrs) = wedged(3, grouped, 24);
+        assert!(pm.len() > 200);
+        let levels = [pm.len(), pm.len() / 3, 0];
+        let bytes = encode_with_attributes(&pm, &levels, EncodeOptions::DEFAULT, &attrs).unwrap();
+        let plain = encode(&pm, &levels, EncodeOptions::DEFAULT);
+        assert!(bytes.len() > plain.len());
+        let h = decode_header(&bytes).unwrap();
+        let layout = h.wedges.expect("wedge table");
+        assert_eq!(layout.channels, attrs.channels);
+        assert_eq!(layout.groups, if grouped { 2 } else { 1 });
+        let dec = decode_with_attributes(&bytes).unwrap();
+        assert_eq!(dec.levels, levels);
+        let got = dec.attributes.as_ref().expect("attributes decoded");
+        assert_eq!(got.count, layout.total);
+        // the plain decoder sees the same topology
+        assert_eq!(decode(&bytes).unwrap().0.splits.len(), pm.len());
+        let (mut a, mut d) = (pm.cursor(), dec.pm.cursor());
+        for k in 0..=pm.len() {
+            assert_eq!(a.mesh().triangles, d.mesh().triangles, "k = {k}");
+            assert_same_corner_values(k, (a.wedges().unwrap(), &attrs), (d.wedges().unwrap(), got));
+            a.refine(1);
+            d.refine(1);
+        }
+        // and back down: the decoded log's "before" wedges undo every edit
+        for k in (0..=pm.len()).rev().step_by(5) {
+            a.seek(k);
+            d.seek(k);
+            assert_same_corner_values(k, (a.wedges().unwrap(), &attrs), (d.wedges().unwrap(), got));
+        }
+    }
+}
+
+#[test]
+fn fully_refined_stream_has_the_input_attributes_at_every_corner() {
+    let (pos, idx, attrs) = charted_sphere(2, true);
+    let out = simplify_with_wedges(
+        &pos,
+        &idx,
+        &attrs.values,
+        attrs.stride(),
+        &SimplifyOptions::DEFAULT.with_target_triangles(10),
+    )
+    .unwrap();
+    let bytes = encode_with_attributes(&out.pm, &[0], EncodeOptions::DEFAULT, &attrs).unwrap();
+    let dec = decode_with_attributes(&bytes).unwrap();
+    let got = dec.attributes.as_ref().unwrap();
+    // topology is exact: the in-memory full mesh has the decoded triangles,
+    // with unquantized positions to find each input corner by
+    let fine = out.pm.mesh_at_splits(out.pm.len());
+    assert_eq!(
+        fine.triangles,
+        dec.pm.mesh_at_splits(dec.pm.len()).triangles
+    );
+    let mut c = dec.pm.cursor();
+    c.seek(dec.pm.len());
+    let wedges = c.wedges().unwrap();
+    // every input triangle appears (as origin), with its corners' values
+    for (t, origin) in out.pm.triangle_origin.iter().enumerate() {
+        let input = &idx[3 * *origin as usize..][..3];
+        let tri = fine.triangles[t];
+        for s in 0..3 {
+            // the same corner, found by position (rotation kept by the log)
+            let p = fine.positions[tri[s] as usize];
+            let k = (0..3)
+                .find(|&j| pos[input[j] as usize] == p)
+                .expect("corner");
+            assert_eq!(
+                got.wedge(wedges[t][s]),
+                attrs.wedge(input[k]),
+                "triangle {t}"
+            );
+            assert_eq!(got.group(wedges[t][s]), attrs.group(input[k]));
+        }
+    }
+}
+
+#[test]
+fn incremental_wedged_decoding_shows_each_step() {
+    let (pm, attrs) = wedged(2, true, 12);
+    let bytes =
+        encode_with_attributes(&pm, &[pm.len(), 0], EncodeOptions::DEFAULT, &attrs).unwrap();
+    let whole = decode_with_attributes(&bytes).unwrap();
+    for chunk in [1, 3, 64, bytes.len()] {
+        let mut d = StreamDecoder::new();
+        let mut a = pm.cursor();
+        for piece in bytes.chunks(chunk) {
+            d.push(piece).unwrap();
+            if d.base().is_some() {
+                a.seek(d.splits().len());
+                assert_same_corner_values(
+                    d.splits().len(),
+                    (a.wedges().unwrap(), &attrs),
+                    (d.wedges().unwrap(), d.attributes().unwrap()),
+                );
+            }
+        }
+        assert_eq!(d.finish_with_attributes().unwrap(), whole);
+    }
+}
+
+#[test]
+fn encoding_attributes_checks_its_input() {
+    let (pm, attrs) = wedged(1, false, 8);
+    let plain = pm_of(
+        &icosphere(1),
+        SimplifyOptions::DEFAULT.with_target_triangles(8),
+    );
+    assert_eq!(
+        encode_with_attributes(&plain, &[0], EncodeOptions::DEFAULT, &attrs),
+        Err(EncodeError::NoWedges)
+    );
+    let mut short = attrs.clone();
+    short.count -= 1;
+    short.values.truncate(short.count * short.stride());
+    assert!(matches!(
+        encode_with_attributes(&pm, &[0], EncodeOptions::DEFAULT, &short),
+        Err(EncodeError::WedgeOutOfRange { .. })
+    ));
+    let mut ragged = attrs.clone();
+    ragged.values.pop();
+    assert!(matches!(
+        encode_with_attributes(&pm, &[0], EncodeOptions::DEFAULT, &ragged),
+        Err(EncodeError::Values { .. })
+    ));
+    let mut unnamed = attrs.clone();
+    unnamed.channels[0].name.clear();
+    assert!(matches!(
+        encode_with_attributes(&pm, &[0], EncodeOptions::DEFAULT, &unnamed),
+        Err(EncodeError::Channel { index: 0, .. })
+    ));
+    let mut groups = attrs;
+    groups.groups = vec![0; 3];
+    assert!(matches!(
+        encode_with_attributes(&pm, &[0], EncodeOptions::DEFAULT, &groups),
+        Err(EncodeError::Groups { .. })
+    ));
+}
+
+fn wedged_sample_stream() -> Vec<u8> {
+    let (pm, attrs) = wedged(1, true, 8);
+    encode_with_attributes(
+        &pm,
+        &[0, 3, pm.len()],
+        EncodeOptions::DEFAULT.with_errors(true),
+        &attrs,
+    )
+    .unwrap()
+}
+
+#[test]
+fn every_truncation_of_a_wedged_stream_is_an_error() {
+    let bytes = wedged_sample_stream();
+    assert!(decode_with_attributes(&bytes).is_ok());
+    for cut in 0..bytes.len() {
+        assert!(
+            matches!(
+                decode_with_attributes(&bytes[..cut]),
+                Err(StreamError::Truncated(_))
+            ),
+            "cut at {cut}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn corrupted_wedged_streams_never_panic(flip in 0usize..100_000, bit in 0u8..8) {
+        let mut v = wedged_sample_stream();
+        let at = flip % v.len();
+        v[at] ^= 1 << bit;
+        if let Ok(d) = decode_with_attributes(&v) {
+            let mut c = d.pm.cursor();
+            c.refine(d.pm.len());
+            let a = d.attributes.unwrap();
+            for w in c.wedges().unwrap().iter().flatten() {
+                prop_assert!((*w as usize) < a.count);
+                let _ = a.wedge(*w);
+            }
+            c.coarsen(d.pm.len());
+        }
     }
 }

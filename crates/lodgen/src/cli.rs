@@ -410,10 +410,11 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
         .with_context(|| format!("writing {}", output.display()))?;
     // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
     if args.progressive {
-        let chains: Vec<_> = builds
+        let chains = builds
             .iter()
-            .map(crate::progressive::ChainStream::from_build)
-            .collect();
+            .map(|b| crate::progressive::ChainStream::from_build(b, &scene.meshes[b.lod.source]))
+            .collect::<Result<Vec<_>, _>>()
+            .context("encoding the vertex-split stream")?;
         crate::progressive::embed(&output, &chains)
             .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
     }

@@ -281,6 +281,157 @@ fn flatten(mesh: &SourceMesh) -> Flat {
     f
 }
 
+/// Every vertex attribute of `mesh` per flat vertex (primitives in order,
+/// each its vertices in order: the numbering of the wedge ids in the log),
+/// for the `LODGEN_progressive` stream: one channel per glTF attribute
+/// some primitive has, named by its semantic (`NORMAL`, `TANGENT`,
+/// `TEXCOORD_n`, `COLOR_n`, `JOINTS_n` as exact small integers,
+/// `WEIGHTS_n`), values exactly the input's; a primitive without an
+/// attribute gets zeros there (white for colours). Each wedge's group is
+/// its primitive.
+pub fn stream_attributes(mesh: &SourceMesh) -> lodgen_pm::stream::WedgeAttributes {
+    use lodgen_pm::stream::{Channel, WedgeAttributes};
+    type Get<'a> = Box<dyn Fn(&Primitive, usize, &mut Vec<f32>) -> bool + 'a>;
+    let prims = &mesh.primitives;
+    let most = |f: &dyn Fn(&Primitive) -> usize| prims.iter().map(f).max().unwrap_or(0);
+    let mut chans: Vec<(String, u8, f32, Get)> = Vec::new();
+    fn put<const N: usize, T: Copy + Into<f64>>(
+        a: Option<&Vec<[T; N]>>,
+        v: usize,
+        out: &mut Vec<f32>,
+    ) -> bool {
+        a.and_then(|a| a.get(v)).is_some_and(|x| {
+            out.extend(x.iter().map(|&c| c.into() as f32));
+            true
+        })
+    }
+    if prims.iter().any(|p| p.normals.is_some()) {
+        chans.push((
+            "NORMAL".into(),
+            3,
+            0.0,
+            Box::new(|p, v, o| put(p.normals.as_ref(), v, o)),
+        ));
+    }
+    if prims.iter().any(|p| p.tangents.is_some()) {
+        chans.push((
+            "TANGENT".into(),
+            4,
+            0.0,
+            Box::new(|p, v, o| put(p.tangents.as_ref(), v, o)),
+        ));
+    }
+    if prims.iter().any(|p| p.texcoords.is_some()) {
+        chans.push((
+            "TEXCOORD_0".into(),
+            2,
+            0.0,
+            Box::new(|p, v, o| put(p.texcoords.as_ref(), v, o)),
+        ));
+    }
+    for i in 0..most(&|p| p.extra_texcoords.len()) {
+        chans.push((
+            format!("TEXCOORD_{}", i + 1),
+            2,
+            0.0,
+            Box::new(move |p, v, o| put(p.extra_texcoords.get(i), v, o)),
+        ));
+    }
+    if prims.iter().any(|p| p.colors.is_some()) {
+        chans.push((
+            "COLOR_0".into(),
+            4,
+            1.0,
+            Box::new(|p, v, o| put(p.colors.as_ref(), v, o)),
+        ));
+    }
+    for i in 0..most(&|p| p.extra_colors.len()) {
+        chans.push((
+            format!("COLOR_{}", i + 1),
+            4,
+            1.0,
+            Box::new(move |p, v, o| put(p.extra_colors.get(i), v, o)),
+        ));
+    }
+    if prims.iter().any(|p| p.joints.is_some()) {
+        chans.push((
+            "JOINTS_0".into(),
+            4,
+            0.0,
+            Box::new(|p, v, o| put(p.joints.as_ref(), v, o)),
+        ));
+        chans.push((
+            "WEIGHTS_0".into(),
+            4,
+            0.0,
+            Box::new(|p, v, o| put(p.weights.as_ref(), v, o)),
+        ));
+    }
+    for i in 0..most(&|p| p.extra_joints.len()) {
+        chans.push((
+            format!("JOINTS_{}", i + 1),
+            4,
+            0.0,
+            Box::new(move |p, v, o| put(p.extra_joints.get(i), v, o)),
+        ));
+        chans.push((
+            format!("WEIGHTS_{}", i + 1),
+            4,
+            0.0,
+            Box::new(move |p, v, o| put(p.extra_weights.get(i), v, o)),
+        ));
+    }
+    let count: usize = prims.iter().map(|p| p.positions.len()).sum();
+    let stride: usize = chans.iter().map(|c| usize::from(c.1)).sum();
+    let mut values = Vec::with_capacity(count * stride);
+    let mut groups = Vec::with_capacity(count);
+    for (pi, p) in prims.iter().enumerate() {
+        for v in 0..p.positions.len() {
+            for (_, n, missing, get) in &chans {
+                if !get(p, v, &mut values) {
+                    values.extend(std::iter::repeat_n(*missing, usize::from(*n)));
+                }
+            }
+            groups.push(pi as u32);
+        }
+    }
+    WedgeAttributes {
+        channels: chans
+            .iter()
+            .map(|(name, components, _, _)| Channel {
+                name: name.clone(),
+                components: *components,
+            })
+            .collect(),
+        values,
+        groups,
+        count,
+    }
+}
+
+/// QEM on `mesh`'s wedges: topology on welded positions, every primitive
+/// and attribute seam kept, attribute quadrics weighted by `weights`. The
+/// log's wedge ids are flat vertex ids (see [`stream_attributes`]).
+pub fn simplify_mesh(
+    mesh: &SourceMesh,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+) -> Result<Simplified, MeshError> {
+    simplify_wedged(mesh, &flatten(mesh), opts, weights)
+}
+
+fn simplify_wedged(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+) -> Result<Simplified, MeshError> {
+    let wedge = wedge_of_vertex(mesh, flat);
+    let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
+    let (values, dims) = weighted_attributes(mesh, flat, weights);
+    simplify_with_wedges(&flat.positions, &wedged, &values, dims, opts)
+}
+
 /// Build the LOD chain of every mesh of `scene`.
 pub fn build_lods(
     scene: &Scene,
@@ -343,10 +494,7 @@ pub fn build_one(
     // methods see positions only, and their levels take attributes from the
     // first input vertex of each position.
     let simplified = if opts.method == Method::Qem {
-        let wedge = wedge_of_vertex(mesh, &flat);
-        let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
-        let (values, dims) = weighted_attributes(mesh, &flat, &opts.attribute_weights);
-        simplify_with_wedges(&flat.positions, &wedged, &values, dims, &sopts)
+        simplify_wedged(mesh, &flat, &sopts, &opts.attribute_weights)
     } else {
         simplify_adaptive(
             &flat.positions,

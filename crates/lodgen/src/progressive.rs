@@ -45,6 +45,8 @@ pub enum ProgressiveError {
     Parse(#[from] serde_json::Error),
     #[error("the LODGEN_progressive stream")]
     Stream(#[from] lodgen_pm::stream::StreamError),
+    #[error("encoding the LODGEN_progressive stream")]
+    Encode(#[from] lodgen_pm::stream::EncodeError),
 }
 
 fn json_err(path: impl Into<String>, what: impl Into<String>) -> ProgressiveError {
@@ -374,20 +376,30 @@ pub struct ChainStream {
 }
 
 impl ChainStream {
-    /// The stream of one [`crate::lod::MeshBuild`]: its whole progressive
-    /// mesh (every primitive of the mesh, flattened) with its level split
-    /// counts, on the default 16-bit grid.
-    pub fn from_build(b: &crate::lod::MeshBuild) -> ChainStream {
+    /// The stream of one [`crate::lod::MeshBuild`] of `mesh`: its whole
+    /// progressive mesh (every primitive of the mesh, flattened) with its
+    /// level split counts, on the default 16-bit grid; with every corner's
+    /// wedge and every input vertex attribute
+    /// ([`crate::lod::stream_attributes`], the wedge group = the primitive)
+    /// when the build tracked wedges (QEM; the curvature-adaptive methods
+    /// stream positions only).
+    pub fn from_build(
+        b: &crate::lod::MeshBuild,
+        mesh: &crate::scene::SourceMesh,
+    ) -> Result<ChainStream, ProgressiveError> {
+        use lodgen_pm::stream::{encode, encode_with_attributes, EncodeOptions};
         let pm = &b.simplified.pm;
-        ChainStream {
+        let stream = if pm.wedges.is_some() {
+            let attributes = crate::lod::stream_attributes(mesh);
+            encode_with_attributes(pm, &b.level_splits, EncodeOptions::DEFAULT, &attributes)?
+        } else {
+            encode(pm, &b.level_splits, EncodeOptions::DEFAULT)
+        };
+        Ok(ChainStream {
             name: b.lod.name.clone(),
             levels: b.level_splits.clone(),
-            stream: lodgen_pm::stream::encode(
-                pm,
-                &b.level_splits,
-                lodgen_pm::stream::EncodeOptions::DEFAULT,
-            ),
-        }
+            stream,
+        })
     }
 }
 

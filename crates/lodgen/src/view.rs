@@ -9,7 +9,10 @@
 //! [`crate::progressive`]; `lodgen IN -o OUT.glb --progressive` writes one);
 //! or any mesh [`crate::io`] reads (a glTF without the extension too), run
 //! through an in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 /
-//! 2 %, stream-encoded.
+//! 2 %, stream-encoded. A file with one mesh that has vertex attributes
+//! (UVs, normals, colours, …) or several primitives goes through the wedge
+//! pipeline (seams kept, attributes in the stream); other files are merged
+//! and streamed as positions.
 //!
 //! Routes: `/` (page), `/viewer.js`, `/info.json` (name, levels, coverage,
 //! stream size), `/stream.bin` (the stream, honouring single `Range:
@@ -19,7 +22,9 @@
 use crate::{cli, io, progressive};
 use anyhow::Context;
 use lodgen_pm::levels::{splits_for, LevelSpec};
-use lodgen_pm::stream::{decode, encode, EncodeOptions};
+use lodgen_pm::stream::{
+    decode, decode_with_attributes, encode, encode_with_attributes, EncodeOptions, WedgeAttributes,
+};
 use lodgen_pm::{simplify, ProgressiveMesh, SimplifyOptions};
 use serde_json::{json, Value};
 use std::io::Cursor as IoCursor;
@@ -67,6 +72,26 @@ pub fn index_hash(triangles: &[[u32; 3]]) -> u32 {
     h
 }
 
+/// FNV-1a (32 bit) over every corner's wedge group and values (`f32` bits),
+/// as little-endian `u32`, corners in index order: the hash the page's
+/// `attributeHash()` computes.
+pub fn attribute_hash(wedges: &[[u32; 3]], attributes: &WedgeAttributes) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    let mut put = |x: u32| {
+        for b in x.to_le_bytes() {
+            h ^= u32::from(b);
+            h = h.wrapping_mul(0x0100_0193);
+        }
+    };
+    for &w in wedges.iter().flatten() {
+        put(attributes.group(w));
+        for v in attributes.wedge(w) {
+            put(v.to_bits());
+        }
+    }
+    h
+}
+
 /// Largest coverage at which an error of `h` (fraction of the bounding-box
 /// diagonal) stays within one reference pixel: `π / (4 N h²)`.
 fn coverage_for_error(h: f64) -> f64 {
@@ -102,6 +127,20 @@ fn pipeline_coverage(pm: &ProgressiveMesh, levels: &[usize], diagonal: f64) -> V
     out
 }
 
+/// The pipeline's levels, finest first (ratios of the input).
+const PIPELINE_RATIOS: [f64; 4] = [1.0, 0.5, 0.1, 0.02];
+
+/// The pipeline's level record counts and their screen coverage.
+fn pipeline_levels(pm: &ProgressiveMesh) -> (Vec<usize>, Vec<f64>) {
+    let levels: Vec<usize> = PIPELINE_RATIOS
+        .iter()
+        .map(|&r| splits_for(pm, LevelSpec::Ratio(r)))
+        .collect();
+    let diagonal = pm.mesh_at_splits(pm.len()).diagonal();
+    let coverage = pipeline_coverage(pm, &levels, diagonal);
+    (levels, coverage)
+}
+
 impl ViewData {
     /// Load `path`: a glTF/GLB with `LODGEN_progressive`, or any readable
     /// mesh through the in-memory pipeline.
@@ -131,8 +170,42 @@ impl ViewData {
         // any other mesh (or a glTF without the extension): the pipeline, on
         // every mesh the file's scene draws, merged
         let scene = io::read_scene(path).with_context(|| format!("reading {}", path.display()))?;
+        if let [mesh] = scene.meshes.as_slice() {
+            let attributes = crate::lod::stream_attributes(mesh);
+            if !attributes.channels.is_empty() || mesh.primitives.len() > 1 {
+                return Self::from_source_mesh(name, mesh, &attributes);
+            }
+        }
         let mesh = cli::merged_mesh(&scene);
         Self::from_mesh(name, &mesh.positions, &mesh.indices())
+    }
+
+    /// The wedge pipeline for one mesh with attributes: QEM with the default
+    /// attribute weights, levels as in [`Self::from_mesh`], every corner's
+    /// attributes in the stream (`attributes` from
+    /// [`crate::lod::stream_attributes`]).
+    pub fn from_source_mesh(
+        name: String,
+        mesh: &crate::scene::SourceMesh,
+        attributes: &WedgeAttributes,
+    ) -> anyhow::Result<ViewData> {
+        let out = crate::lod::simplify_mesh(
+            mesh,
+            &SimplifyOptions::DEFAULT.with_target_ratio(PIPELINE_RATIOS[3]),
+            &crate::lod::AttributeWeights::DEFAULT,
+        )
+        .with_context(|| format!("simplifying {name}"))?;
+        let pm = out.pm;
+        let (levels, screen_coverage) = pipeline_levels(&pm);
+        let stream = encode_with_attributes(&pm, &levels, EncodeOptions::DEFAULT, attributes)
+            .with_context(|| format!("encoding the stream of {name}"))?;
+        Ok(ViewData {
+            name,
+            stream,
+            levels,
+            screen_coverage,
+            source: "pipeline",
+        })
     }
 
     /// The in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 / 2 %
@@ -142,20 +215,14 @@ impl ViewData {
         positions: &[[f32; 3]],
         indices: &[u32],
     ) -> anyhow::Result<ViewData> {
-        let ratios = [1.0, 0.5, 0.1, 0.02];
         let out = simplify(
             positions,
             indices,
-            &SimplifyOptions::DEFAULT.with_target_ratio(ratios[3]),
+            &SimplifyOptions::DEFAULT.with_target_ratio(PIPELINE_RATIOS[3]),
         )
         .with_context(|| format!("simplifying {name}"))?;
         let pm = out.pm;
-        let levels: Vec<usize> = ratios
-            .iter()
-            .map(|&r| splits_for(&pm, LevelSpec::Ratio(r)))
-            .collect();
-        let diagonal = pm.mesh_at_splits(pm.len()).diagonal();
-        let screen_coverage = pipeline_coverage(&pm, &levels, diagonal);
+        let (levels, screen_coverage) = pipeline_levels(&pm);
         let stream = encode(&pm, &levels, EncodeOptions::DEFAULT);
         Ok(ViewData {
             name,
@@ -168,27 +235,39 @@ impl ViewData {
 
     /// Per level (finest first): record count, triangle and vertex counts
     /// and the [`index_hash`] of the mesh the page must show after that many
-    /// records. What `lodgen view --print-levels` prints and the browser
-    /// test asserts.
+    /// records, and with attributes the [`attribute_hash`] of its corners.
+    /// What `lodgen view --print-levels` prints and the browser test asserts.
     pub fn level_summary(&self) -> anyhow::Result<Value> {
-        let (pm, _) = decode(&self.stream).context("decoding the stream")?;
+        let d = decode_with_attributes(&self.stream).context("decoding the stream")?;
+        let mut cursor = d.pm.cursor();
         let levels: Vec<Value> = self
             .levels
             .iter()
             .map(|&k| {
-                let m = pm.mesh_at_splits(k);
-                json!({
+                cursor.seek(k);
+                let m = cursor.mesh();
+                let mut level = json!({
                     "records": k,
                     "triangles": m.triangles.len(),
                     "vertices": m.positions.len(),
                     "indexHash": index_hash(&m.triangles),
-                })
+                });
+                if let (Some(a), Some(w)) = (&d.attributes, cursor.wedges()) {
+                    level["attributeHash"] = json!(attribute_hash(w, a));
+                }
+                level
             })
             .collect();
+        let channels: Vec<&str> = d
+            .attributes
+            .as_ref()
+            .map(|a| a.channels.iter().map(|c| c.name.as_str()).collect())
+            .unwrap_or_default();
         Ok(json!({
             "name": self.name,
-            "splits": pm.len(),
+            "splits": d.pm.len(),
             "streamBytes": self.stream.len(),
+            "channels": channels,
             "levels": levels,
         }))
     }

@@ -2,7 +2,9 @@
 //! bunny (or, without the shared asset, a noisy torus knot) through the
 //! in-memory pipeline, writes the expected per-level triangle counts and
 //! index hashes, and runs the script, which checks the page against them and
-//! writes `target/test-out/viewer-*.png`.
+//! writes `target/test-out/viewer-*.png`; then the same for spot.obj, whose
+//! stream carries its UVs, with the per-level hashes of every corner's
+//! attribute values (`target/test-out/viewer-spot/`).
 //!
 //! `LODGEN_VIEW_FILE=path` serves that file instead (e.g. a `.glb` written
 //! with `--progressive`).
@@ -61,10 +63,23 @@ fn viewer_page_matches_levels_in_headless_chromium() {
         let m = torus_knot(2, 3, 300, 24, 0.02);
         ViewData::from_mesh("torus knot".into(), &m.positions, &m.indices()).unwrap()
     };
-    let out = root().join("target/test-out");
-    std::fs::create_dir_all(&out).unwrap();
+    run_viewer(data, &root().join("target/test-out"));
+
+    // a textured mesh: the stream carries its UVs (wedges), the page must
+    // show every corner's streamed values at each level (attribute hash)
+    if let Some(spot) = lodgen::assets::shared_asset("spot.obj") {
+        let data = ViewData::load(&spot).unwrap();
+        let summary = data.level_summary().unwrap();
+        assert_eq!(summary["channels"], serde_json::json!(["TEXCOORD_0"]));
+        run_viewer(data, &root().join("target/test-out/viewer-spot"));
+    }
+}
+
+/// Serve `data`, run tests/js/viewer.mjs against it, screenshots into `out`.
+fn run_viewer(data: ViewData, out: &std::path::Path) {
+    std::fs::create_dir_all(out).unwrap();
     // stale screenshots must not satisfy the count below
-    for e in std::fs::read_dir(&out).unwrap().filter_map(Result::ok) {
+    for e in std::fs::read_dir(out).unwrap().filter_map(Result::ok) {
         let n = e.file_name().to_string_lossy().into_owned();
         if n.starts_with("viewer-L") && n.ends_with(".png") {
             std::fs::remove_file(e.path()).unwrap();
@@ -82,7 +97,7 @@ fn viewer_page_matches_levels_in_headless_chromium() {
         .args(["--url", &url, "--expect"])
         .arg(&expect)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .output();
     stop.stop();
     thread.join().unwrap();
@@ -94,7 +109,7 @@ fn viewer_page_matches_levels_in_headless_chromium() {
     );
     eprintln!("{log}");
     assert!(result.status.success(), "viewer.mjs failed:\n{log}");
-    let shots = std::fs::read_dir(&out)
+    let shots = std::fs::read_dir(out)
         .unwrap()
         .filter_map(Result::ok)
         .filter(|e| {

@@ -135,3 +135,101 @@ fn progressive_output_loads_in_the_viewer_and_validates() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A textured OBJ through `lodgen --progressive`: the embedded stream carries
+/// the UVs (channel `TEXCOORD_0`, wedges), and fully refined it has exactly
+/// the input's corner UVs (as the reader gives them), corner for corner.
+#[test]
+fn progressive_output_streams_the_input_uvs() {
+    let dir = root().join(format!("target/test-out/view-uv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // a sphere with a longitude UV seam: vertices on the seam get two UVs
+    let m = icosphere(3);
+    let mut text = String::new();
+    let mut vt = Vec::new();
+    for p in &m.positions {
+        text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    for t in &m.triangles {
+        let mut f = String::from("f");
+        // the triangle's longitudes, unwrapped across the seam at ±π
+        let lon: Vec<f32> = t
+            .iter()
+            .map(|&v| m.positions[v as usize][2].atan2(m.positions[v as usize][0]))
+            .collect();
+        let wrap = lon.iter().any(|&a| a > 2.0) && lon.iter().any(|&a| a < -2.0);
+        for (k, &v) in t.iter().enumerate() {
+            let p = m.positions[v as usize];
+            let mut u = lon[k];
+            if wrap && u < 0.0 {
+                u += std::f32::consts::TAU;
+            }
+            let uv = (u / std::f32::consts::TAU + 0.5, p[1] * 0.5 + 0.5);
+            vt.push(uv);
+            text += &format!("vt {} {}\n", uv.0, uv.1);
+            f += &format!(" {}/{}", v + 1, vt.len());
+        }
+        text += &f;
+        text += "\n";
+    }
+    let input = dir.join("uvsphere.obj");
+    std::fs::write(&input, text).unwrap();
+    let out = dir.join("uvsphere.glb");
+    let status = Command::new(env!("CARGO_BIN_EXE_lodgen"))
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--levels", "50%,10%", "--progressive", "--quiet"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+
+    let data = ViewData::load(&out).unwrap();
+    assert_eq!(data.source, "gltf");
+    assert_eq!(
+        data.level_summary().unwrap()["channels"],
+        serde_json::json!(["TEXCOORD_0"])
+    );
+    let d = lodgen_pm::stream::decode_with_attributes(&data.stream).unwrap();
+    let a = d.attributes.as_ref().unwrap();
+    let mut c = d.pm.cursor();
+    c.seek(d.pm.len());
+    let bits = |uv: &[f32]| (uv[0].to_bits(), uv[1].to_bits());
+    let mut got: Vec<_> = c
+        .wedges()
+        .unwrap()
+        .iter()
+        .flatten()
+        .map(|&w| bits(a.wedge(w)))
+        .collect();
+    // the reader's UVs, corner by corner
+    let scene = lodgen::io::read_scene(&input).unwrap();
+    let p = &scene.meshes[0].primitives[0];
+    let uvs = p.texcoords.as_ref().unwrap();
+    let mut want: Vec<_> = p.indices.iter().map(|&i| bits(&uvs[i as usize])).collect();
+    got.sort_unstable();
+    want.sort_unstable();
+    assert_eq!(got.len(), m.triangles.len() * 3);
+    assert_eq!(got, want);
+    // and in the coarsest level no triangle spans the seam: no triangle's u
+    // range is wider than the widest of the input's (the pole fans); one
+    // across the seam would span nearly the whole [0, 1]
+    let spread = |u: [f32; 3]| {
+        u.iter().cloned().fold(f32::MIN, f32::max) - u.iter().cloned().fold(f32::MAX, f32::min)
+    };
+    let widest = p
+        .indices
+        .chunks_exact(3)
+        .map(|t| spread([0, 1, 2].map(|k| uvs[t[k] as usize][0])))
+        .fold(0.0, f32::max);
+    assert!(widest < 0.75, "{widest}");
+    c.seek(0);
+    for w in c.wedges().unwrap() {
+        let u = w.map(|x| a.wedge(x)[0]);
+        assert!(
+            spread(u) <= widest,
+            "a coarse triangle spans the UV seam: {u:?}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

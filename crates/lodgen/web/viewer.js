@@ -10,9 +10,15 @@
 // crates/lodgen-pm/src/stream.rs and yields the same f32 positions
 // (origin + q * step in double precision, rounded once to f32).
 //
+// A stream with wedges (header flag 2) also carries every corner's wedge and
+// every wedge's attribute values (NORMAL, TEXCOORD_0, COLOR_0, … as the
+// input had them): the mesh is then drawn corner by corner with them, shaded
+// by the "shading" menu (UV checker, normals, colour, primitive).
+//
 // For tests, window.lodgen exposes: triangles(), vertices(), indexHash(),
-// refineTo(k), applied(), decoded(), complete(), info, history, levels(),
-// pixelStats(), setCamera(yaw, pitch, distanceFactor), error().
+// attributeHash(), channels(), setShading(mode), refineTo(k), applied(),
+// decoded(), complete(), info, history, levels(), pixelStats(),
+// setCamera(yaw, pitch, distanceFactor), error().
 "use strict";
 
 // ------------------------------------------------------------------ decoder
@@ -116,6 +122,7 @@ class StreamDecoder {
       }
       if (r.pos < r.b.length) throw new Error(`${r.b.length - r.pos} bytes follow the last record`);
       if (this.nt !== h.totalTriangles) throw new Error("the records restore a different triangle count");
+      if (h.wedges && this.nw !== h.wedges.total) throw new Error("the records define a different wedge count");
     } catch (e) {
       if (e !== NEED_MORE) throw e;
     }
@@ -130,7 +137,7 @@ class StreamDecoder {
 
   complete() {
     return !!this.header && this.baseReady && this.records.length === this.header.splitCount &&
-      this.pending.length === 0;
+      this.pending.length === 0 && (!this.header.wedges || this.nw === this.header.wedges.total);
   }
 
   parseHeader(r) {
@@ -139,7 +146,7 @@ class StreamDecoder {
     const version = r.byte();
     if (version !== 1) throw new Error(`unsupported stream version ${version}`);
     const flags = r.byte();
-    if (flags & ~1) throw new Error(`unknown flags ${flags}`);
+    if (flags & ~3) throw new Error(`unknown flags ${flags}`);
     const bits = r.byte();
     if (bits < 1 || bits > 30) throw new Error(`grid bits ${bits}`);
     const origin = [r.f32(), r.f32(), r.f32()];
@@ -158,7 +165,47 @@ class StreamDecoder {
     if (h.totalTriangles < h.baseTriangles) throw new Error("inconsistent triangle counts");
     const n = r.bounded(max, "level count");
     for (let i = 0; i < n; i++) h.levels.push(r.bounded(h.splitCount, "level"));
+    h.wedges = null;
+    if (flags & 2) {
+      const total = r.bounded(max, "wedge count");
+      const groups = r.bounded(max, "group count");
+      if (groups === 0) throw new Error("zero wedge groups");
+      const nch = r.bounded(64, "channel count");
+      const channels = [];
+      let stride = 0;
+      for (let i = 0; i < nch; i++) {
+        const len = r.bounded(64, "channel name length");
+        const bytes = new Uint8Array(len);
+        for (let j = 0; j < len; j++) bytes[j] = r.byte();
+        const name = new TextDecoder("utf-8", { fatal: true }).decode(bytes);
+        if (!name) throw new Error("empty channel name");
+        const components = r.byte();
+        if (components < 1 || components > 16) throw new Error(`${components} components`);
+        channels.push({ name, components, offset: stride });
+        stride += components;
+      }
+      h.wedges = { total, groups, channels, stride };
+    }
     return h;
+  }
+
+  // One wedge reference: 0 = a new wedge (group if several, then its values),
+  // k >= 1 = wedge count - k. New wedges go to `tmp` until the piece commits.
+  readWedge(r, tmp) {
+    const w = this.header.wedges;
+    const code = r.bounded(tmp.n, "wedge reference");
+    if (code > 0) return tmp.n - code;
+    if (tmp.n >= w.total) throw new Error(`more wedges than the ${w.total} announced`);
+    tmp.groups.push(w.groups > 1 ? r.bounded(w.groups - 1, "wedge group") : 0);
+    for (let i = 0; i < w.stride; i++) tmp.vals.push(r.f32());
+    return tmp.n++;
+  }
+
+  commitWedges(tmp) {
+    const w = this.header.wedges;
+    this.wvals.set(tmp.vals, this.nw * w.stride);
+    this.wgroups.set(tmp.groups, this.nw);
+    this.nw = tmp.n;
   }
 
   deq(qx, qy, qz, out, o) {
@@ -189,6 +236,18 @@ class StreamDecoder {
       p += r.zz();
       if (p < 0 || p >= h.baseVertices) throw new Error(`base corner ${p} out of range`);
       tri[i] = p;
+    }
+    let tmp = null;
+    if (h.wedges) {
+      tmp = { n: 0, vals: [], groups: [] };
+      this.baseCW = new Uint32Array(h.baseTriangles * 3);
+      for (let i = 0; i < h.baseTriangles * 3; i++) this.baseCW[i] = this.readWedge(r, tmp);
+      this.wvals = new Float32Array(h.wedges.total * h.wedges.stride);
+      this.wgroups = new Uint32Array(h.wedges.total);
+      this.nw = 0;
+      this.cw = new Uint32Array(h.totalTriangles * 3);
+      this.cw.set(this.baseCW, 0);
+      this.commitWedges(tmp);
     }
     // complete: commit
     this.q = q;
@@ -232,6 +291,15 @@ class StreamDecoder {
       corners[nc - 1 - i] = t * 3 + slot;
       prev = t + 1;
     }
+    let wfaces = null, wafter = null, wbefore = null, tmp = null;
+    if (h.wedges) {
+      tmp = { n: this.nw, vals: [], groups: [] };
+      wfaces = new Uint32Array(nf * 3);
+      for (let i = 0; i < nf * 3; i++) wfaces[i] = this.readWedge(r, tmp);
+      wafter = new Uint32Array(nc);
+      wbefore = new Uint32Array(nc);
+      for (let i = 0; i < nc; i++) wafter[nc - 1 - i] = this.readWedge(r, tmp);
+    }
     if (h.flags & 1) r.f32();
     // validate corners against the decode-side mesh (faces appended)
     for (let i = 0; i < nc; i++) {
@@ -240,7 +308,16 @@ class StreamDecoder {
       if (value !== v1 || (i > 0 && corners[i - 1] === c)) throw new Error(`corner ${c} does not hold v1`);
     }
     // commit
-    const rec = { v1, v0, p1: new Float32Array(3), pm: new Float32Array(3), p0: new Float32Array(3), faces, corners };
+    const rec = { v1, v0, p1: new Float32Array(3), pm: new Float32Array(3), p0: new Float32Array(3), faces, corners,
+      wfaces, wafter, wbefore };
+    if (h.wedges) {
+      this.cw.set(wfaces, this.nt * 3);
+      for (let i = 0; i < nc; i++) {
+        wbefore[i] = this.cw[corners[i]];
+        this.cw[corners[i]] = wafter[i];
+      }
+      this.commitWedges(tmp);
+    }
     this.deq(q[3 * v1], q[3 * v1 + 1], q[3 * v1 + 2], rec.pm, 0);
     this.deq(q1[0], q1[1], q1[2], rec.p1, 0);
     this.deq(q0[0], q0[1], q0[2], rec.p0, 0);
@@ -269,6 +346,11 @@ class Display {
     this.nt = h.baseTriangles;
     this.applied = 0;
     this.dirty = true;
+    this.cw = null; // every corner's wedge, with wedges
+    if (h.wedges) {
+      this.cw = new Uint32Array(h.totalTriangles * 3);
+      this.cw.set(dec.baseCW, 0);
+    }
   }
   refine(n) {
     const recs = this.dec.records;
@@ -277,6 +359,10 @@ class Display {
       const r = recs[i];
       this.pos.set(r.p1, 3 * r.v1);
       this.pos.set(r.p0, 3 * r.v0);
+      if (this.cw) {
+        this.cw.set(r.wfaces, this.nt * 3);
+        for (let j = 0; j < r.corners.length; j++) this.cw[r.corners[j]] = r.wafter[j];
+      }
       this.idx.set(r.faces, this.nt * 3);
       this.nt += r.faces.length / 3;
       for (const c of r.corners) this.idx[c] = r.v0;
@@ -291,6 +377,7 @@ class Display {
     for (let i = this.applied - 1; i >= start; i--) {
       const r = recs[i];
       for (const c of r.corners) this.idx[c] = r.v1;
+      if (this.cw) for (let j = 0; j < r.corners.length; j++) this.cw[r.corners[j]] = r.wbefore[j];
       this.nt -= r.faces.length / 3;
       this.nv -= 1;
       this.pos.set(r.pm, 3 * r.v1);
@@ -313,6 +400,27 @@ class Display {
         h = Math.imul(h, 0x01000193) >>> 0;
         v >>>= 8;
       }
+    }
+    return h >>> 0;
+  }
+  attributeHash() {
+    // FNV-1a 32 over each corner's wedge group and values (f32 bits), as
+    // little-endian u32, corners in index order (view.rs attribute_hash)
+    const w = this.dec.header.wedges;
+    if (!w) return 0;
+    const bits = new Uint32Array(this.dec.wvals.buffer);
+    let h = 0x811c9dc5;
+    const put = (x) => {
+      for (let b = 0; b < 4; b++) {
+        h ^= x & 0xff;
+        h = Math.imul(h, 0x01000193) >>> 0;
+        x >>>= 8;
+      }
+    };
+    for (let i = 0; i < this.nt * 3; i++) {
+      const c = this.cw[i];
+      put(this.dec.wgroups[c]);
+      for (let j = 0; j < w.stride; j++) put(bits[c * w.stride + j]);
     }
     return h >>> 0;
   }
@@ -343,29 +451,62 @@ function mul(a, b) {
 
 // ------------------------------------------------------------------ viewer
 
+// Attribute locations: 0 position, 1 NORMAL, 2 TEXCOORD_0, 3 COLOR_0, 4 group.
 const VS = `#version 300 es
 in vec3 pos;
+in vec3 nrm;
+in vec2 uv;
+in vec4 col;
+in float grp;
 uniform mat4 mvp;
 out vec3 wpos;
-void main() { wpos = pos; gl_Position = mvp * vec4(pos, 1.0); }`;
+out vec3 vnrm;
+out vec2 vuv;
+out vec4 vcol;
+flat out float vgrp;
+void main() {
+  wpos = pos; vnrm = nrm; vuv = uv; vcol = col; vgrp = grp;
+  gl_Position = mvp * vec4(pos, 1.0);
+}`;
+
+// Shading modes: 0 faceted, 1 NORMAL, 2 UV checker (TEXCOORD_0), 3 COLOR_0,
+// 4 primitive (wedge group).
+const SHADING = ["faceted", "normals", "uv checker", "color", "primitive"];
 
 const FS = `#version 300 es
 precision highp float;
 in vec3 wpos;
+in vec3 vnrm;
+in vec2 vuv;
+in vec4 vcol;
+flat in float vgrp;
 uniform vec3 eye;
+uniform int mode;
 out vec4 color;
 void main() {
   vec3 n = normalize(cross(dFdx(wpos), dFdy(wpos)));
+  if (mode == 1 && dot(vnrm, vnrm) > 0.0) n = normalize(vnrm);
   vec3 l = normalize(eye - wpos);
   float d = abs(dot(n, l));
-  color = vec4(vec3(0.12, 0.13, 0.16) + d * vec3(0.78, 0.74, 0.66), 1.0);
+  vec3 albedo = vec3(0.78, 0.74, 0.66);
+  if (mode == 2) {
+    vec2 c = floor(vuv * 16.0);
+    float k = mod(c.x + c.y, 2.0);
+    albedo = mix(vec3(0.95, 0.55, 0.15), vec3(0.2, 0.45, 0.9), k);
+  } else if (mode == 3) {
+    albedo = vcol.rgb;
+  } else if (mode == 4) {
+    float h = fract(vgrp * 0.618034);
+    albedo = clamp(abs(mod(h * 6.0 + vec3(0.0, 4.0, 2.0), 6.0) - 3.0) - 1.0, 0.0, 1.0) * 0.7 + 0.2;
+  }
+  color = vec4(vec3(0.12, 0.13, 0.16) + d * albedo, 1.0);
 }`;
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
 const state = {
   info: null, dec: new StreamDecoder(), disp: null, gl: null, prog: null, vao: null, pbuf: null, ibuf: null,
-  uploadedV: 0, uploadedT: 0, follow: true, auto: false, culled: false,
+  uploadedV: 0, uploadedT: 0, follow: true, auto: false, culled: false, shading: 0, abufs: null,
   yaw: 0.6, pitch: 0.25, distFactor: 2.6, center: [0, 0, 0], radius: 1, history: [], error: null, bytes: 0,
 };
 
@@ -388,11 +529,38 @@ function initGL() {
   const p = gl.createProgram();
   gl.attachShader(p, sh(gl.VERTEX_SHADER, VS));
   gl.attachShader(p, sh(gl.FRAGMENT_SHADER, FS));
-  gl.bindAttribLocation(p, 0, "pos");
+  ["pos", "nrm", "uv", "col", "grp"].forEach((n, i) => gl.bindAttribLocation(p, i, n));
   gl.linkProgram(p);
   if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
   state.gl = gl;
   state.prog = p;
+}
+
+// The channel `name` of the stream's wedges: {offset, components} or null.
+function channel(name) {
+  const w = state.dec.header && state.dec.header.wedges;
+  return (w && w.channels.find((c) => c.name === name)) || null;
+}
+
+// Shading modes this stream can show.
+function shadingModes() {
+  const w = state.dec.header && state.dec.header.wedges;
+  const modes = [0];
+  if (w) {
+    if (channel("NORMAL")) modes.push(1);
+    if (channel("TEXCOORD_0")) modes.push(2);
+    if (channel("COLOR_0")) modes.push(3);
+    if (w.groups > 1) modes.push(4);
+  }
+  return modes;
+}
+
+function setShading(mode) {
+  if (!shadingModes().includes(mode)) return false;
+  state.shading = mode;
+  $("shade").value = String(mode);
+  requestFrame();
+  return true;
 }
 
 function initMesh() {
@@ -406,15 +574,42 @@ function initMesh() {
   state.radius = Math.max(1e-9, Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2);
   state.vao = gl.createVertexArray();
   gl.bindVertexArray(state.vao);
-  state.pbuf = gl.createBuffer();
-  gl.bindBuffer(gl.ARRAY_BUFFER, state.pbuf);
-  gl.bufferData(gl.ARRAY_BUFFER, h.totalVertices * 12, gl.DYNAMIC_DRAW);
-  gl.enableVertexAttribArray(0);
-  gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
-  state.ibuf = gl.createBuffer();
-  gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, state.ibuf);
-  gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, Math.max(4, h.totalTriangles * 12), gl.DYNAMIC_DRAW);
+  if (h.wedges) {
+    // drawn corner by corner: position and the corner's wedge values
+    const corners = Math.max(1, h.totalTriangles * 3);
+    const make = (loc, name, n) => {
+      const buf = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+      gl.bufferData(gl.ARRAY_BUFFER, corners * n * 4, gl.DYNAMIC_DRAW);
+      gl.enableVertexAttribArray(loc);
+      gl.vertexAttribPointer(loc, n, gl.FLOAT, false, 0, 0);
+      return { loc, n, buf, ch: name ? channel(name) : null, data: new Float32Array(corners * n) };
+    };
+    state.abufs = [make(0, null, 3)];
+    if (channel("NORMAL")) state.abufs.push(make(1, "NORMAL", 3)); else gl.vertexAttrib3f(1, 0, 0, 0);
+    if (channel("TEXCOORD_0")) state.abufs.push(make(2, "TEXCOORD_0", 2));
+    if (channel("COLOR_0")) state.abufs.push(make(3, "COLOR_0", 4)); else gl.vertexAttrib4f(3, 1, 1, 1, 1);
+    state.abufs.push(make(4, "", 1));
+  } else {
+    state.pbuf = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, state.pbuf);
+    gl.bufferData(gl.ARRAY_BUFFER, h.totalVertices * 12, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    state.ibuf = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, state.ibuf);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, Math.max(4, h.totalTriangles * 12), gl.DYNAMIC_DRAW);
+  }
   gl.bindVertexArray(null);
+  const sel = $("shade");
+  for (const m of shadingModes()) {
+    const o = document.createElement("option");
+    o.value = String(m);
+    o.textContent = SHADING[m];
+    sel.appendChild(o);
+  }
+  const modes = shadingModes();
+  setShading(modes.includes(2) ? 2 : modes.includes(1) ? 1 : 0);
   $("total").textContent = h.splitCount;
   const lv = $("levels");
   (state.info.levels || h.levels).forEach((k, i) => {
@@ -429,6 +624,31 @@ function initMesh() {
 function upload() {
   const gl = state.gl, disp = state.disp;
   if (!disp.dirty) return;
+  if (state.abufs) {
+    // expand corners: position of the corner's vertex, values of its wedge
+    const d = state.dec, stride = d.header.wedges.stride, n = disp.nt * 3;
+    for (const a of state.abufs) {
+      const out = a.data;
+      if (a.loc === 0) {
+        for (let i = 0; i < n; i++) {
+          const v = 3 * disp.idx[i];
+          out[3 * i] = disp.pos[v]; out[3 * i + 1] = disp.pos[v + 1]; out[3 * i + 2] = disp.pos[v + 2];
+        }
+      } else if (a.loc === 4) {
+        for (let i = 0; i < n; i++) out[i] = d.wgroups[disp.cw[i]];
+      } else {
+        const o = a.ch.offset, k = a.n;
+        for (let i = 0; i < n; i++) {
+          const w = disp.cw[i] * stride + o;
+          for (let j = 0; j < k; j++) out[k * i + j] = d.wvals[w + j];
+        }
+      }
+      gl.bindBuffer(gl.ARRAY_BUFFER, a.buf);
+      if (n > 0) gl.bufferSubData(gl.ARRAY_BUFFER, 0, out, 0, n * a.n);
+    }
+    disp.dirty = false;
+    return;
+  }
   gl.bindBuffer(gl.ARRAY_BUFFER, state.pbuf);
   gl.bufferSubData(gl.ARRAY_BUFFER, 0, disp.pos, 0, disp.nv * 3);
   gl.bindVertexArray(state.vao);
@@ -487,8 +707,12 @@ function render() {
   gl.useProgram(state.prog);
   gl.uniformMatrix4fv(gl.getUniformLocation(state.prog, "mvp"), false, cam.mvp);
   gl.uniform3fv(gl.getUniformLocation(state.prog, "eye"), cam.eye);
+  gl.uniform1i(gl.getUniformLocation(state.prog, "mode"), state.shading);
   gl.bindVertexArray(state.vao);
-  if (!state.culled && state.disp.nt > 0) gl.drawElements(gl.TRIANGLES, state.disp.nt * 3, gl.UNSIGNED_INT, 0);
+  if (!state.culled && state.disp.nt > 0) {
+    if (state.abufs) gl.drawArrays(gl.TRIANGLES, 0, state.disp.nt * 3);
+    else gl.drawElements(gl.TRIANGLES, state.disp.nt * 3, gl.UNSIGNED_INT, 0);
+  }
   gl.bindVertexArray(null);
   updatePanel();
 }
@@ -570,6 +794,7 @@ function bindControls() {
   }, { passive: false });
   $("level").addEventListener("input", (e) => { state.follow = false; setAuto(false); refineTo(Number(e.target.value)); });
   $("auto").addEventListener("change", (e) => { state.follow = false; setAuto(e.target.checked); });
+  $("shade").addEventListener("change", (e) => setShading(Number(e.target.value)));
   window.addEventListener("resize", requestFrame);
 }
 
@@ -577,6 +802,13 @@ window.lodgen = {
   triangles: () => (state.disp ? state.disp.nt : 0),
   vertices: () => (state.disp ? state.disp.nv : 0),
   indexHash: () => (state.disp ? state.disp.indexHash() : 0),
+  attributeHash: () => (state.disp ? state.disp.attributeHash() : 0),
+  channels: () => {
+    const w = state.dec.header && state.dec.header.wedges;
+    return w ? w.channels.map((c) => c.name) : [];
+  },
+  shadingModes: () => shadingModes().map((m) => SHADING[m]),
+  setShading: (name) => { const ok = setShading(SHADING.indexOf(name)); render(); return ok; },
   refineTo: (k) => { state.follow = false; setAuto(false); const a = refineTo(k); render(); return a; },
   applied: () => (state.disp ? state.disp.applied : 0),
   decoded: () => state.dec.records.length,
