@@ -20,8 +20,15 @@
 //!          corners, descending: (gap << 2 | slot), gap of the first from
 //!          triangle_count − 1 (after the faces are appended), then from the
 //!          previous corner's triangle
+//!          [wedges, if flags & 2: faces × 3 wedge refs · corners × 1 wedge ref
+//!           (the wedge after the split, in the stored corner order)]
 //!          [error f32le, if flags & 1]
 //! ```
+//! With flags & 2 the header ends with `total_wedges · group_count ·
+//! channel_count · (name_len · name · components u8) × channel_count` and
+//! the base with `base_triangles × 3` wedge refs; a wedge ref is `0` for a
+//! new wedge (then its group varint when `group_count > 1`, then its
+//! values as `f32le`) or `k ≥ 1` for wedge `count − k`.
 //! `v0` is implicit (`base_vertices + record index`) and `p_merged` is the
 //! decoder's current position of `v1`, so neither is stored.
 //!
@@ -35,6 +42,10 @@
 //! plus the `f32` rounding of the result (half an ulp of the coordinate).
 //! Split errors are kept only with [`EncodeOptions::errors`] (otherwise
 //! decoded as 0).
+//!
+//! With [`encode_with_attributes`] every corner's wedge at every step and
+//! every wedge's values are exact too: [`decode_with_attributes`] gives the
+//! log's wedges renumbered by first appearance, with their values.
 
 use crate::mesh::Mesh;
 use crate::vsplit::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};

@@ -233,3 +233,38 @@ fn progressive_output_streams_the_input_uvs() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The stream's size on spot.obj (UVs) with and without its attributes,
+/// against the finest level alone as plain buffers (skipped when the shared asset
+/// is absent). `cargo test --release -p lodgen --test view_gltf spot -- --nocapture`
+#[test]
+fn spot_stream_with_uvs_is_within_a_quarter_of_plain_buffers() {
+    let Some(path) = lodgen::assets::shared_asset("spot.obj") else {
+        return;
+    };
+    let scene = lodgen::io::read_scene(&path).unwrap();
+    let mesh = &scene.meshes[0];
+    let attributes = lodgen::lod::stream_attributes(mesh);
+    let data = ViewData::from_source_mesh("spot".into(), mesh, &attributes).unwrap();
+    let d = lodgen_pm::stream::decode_with_attributes(&data.stream).unwrap();
+    let plain = lodgen_pm::stream::encode(&d.pm, &data.levels, Default::default());
+    let a = d.attributes.as_ref().unwrap();
+    let fine = d.pm.mesh_at_splits(d.pm.len());
+    // the finest level as glTF buffers: one vertex per wedge (position +
+    // UV), u32 indices
+    let buffers = a.count * (12 + 8) + 12 * fine.triangles.len();
+    eprintln!(
+        "spot: {} triangles, {} vertices, {} wedges; stream {} B with UVs, {} B positions only; \
+         plain f32 buffers {buffers} B (stream = {:.3}×)",
+        fine.triangles.len(),
+        fine.positions.len(),
+        a.count,
+        data.stream.len(),
+        plain.len(),
+        data.stream.len() as f64 / buffers as f64,
+    );
+    assert!(data.stream.len() > plain.len());
+    // the same bound as the bunny's positions-only stream (lodgen-pm
+    // tests/stream.rs): every level, exact UVs, at most 1.25× one level
+    assert!(data.stream.len() as f64 <= 1.25 * buffers as f64);
+}
