@@ -63,7 +63,8 @@ pub struct BuildArgs {
     /// Weights of attributes in the cost (Hoppe 1999 attribute quadrics),
     /// e.g. "normal=0.5,uv=1,color=0.5" (unnamed ones keep their default).
     /// 1 makes an attribute difference of 1 cost like a displacement by the
-    /// bounding-box diagonal; 0 leaves an attribute out. Seams, hard edges
+    /// bounding-box diagonal; 0 leaves an attribute out. "uv" weighs every
+    /// TEXCOORD_n set, "color" every COLOR_n set. Seams, hard edges
     /// and material borders are kept whatever the weights. The defaults
     /// measured best on spot.obj (`cargo xtask attributes`, ARCHITECTURE.md).
     #[arg(

@@ -71,9 +71,9 @@ pub struct BuildOptions {
 pub struct AttributeWeights {
     /// Unit normals (a difference of 2 is opposite). Default value: 0.05.
     pub normal: f32,
-    /// `TEXCOORD_0`. Default value: 0.5.
+    /// Every `TEXCOORD_n` set. Default value: 0.5.
     pub uv: f32,
-    /// `COLOR_0`, RGBA. Default value: 0.5.
+    /// Every `COLOR_n` set, RGBA. Default value: 0.5.
     pub color: f32,
 }
 
@@ -211,14 +211,30 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
 }
 
 /// The weighted attribute vector of every flat vertex for the cost, and its
-/// length: normal, UV, colour, each present when some primitive has it and
-/// its weight is not 0 (vertices of primitives without it get zeros).
+/// length: normal, every UV set, every colour set, each present when some
+/// primitive has it and its weight is not 0 (vertices of primitives without
+/// it get zeros, white for colours). Tangents follow the UV charts and are
+/// not priced; joints and weights are never interpolated.
 fn weighted_attributes(mesh: &SourceMesh, flat: &Flat, w: &AttributeWeights) -> (Vec<f32>, usize) {
     let any = |f: &dyn Fn(&Primitive) -> bool| mesh.primitives.iter().any(f);
+    let most = |f: &dyn Fn(&Primitive) -> usize| mesh.primitives.iter().map(f).max().unwrap_or(0);
     let normal = w.normal != 0.0 && any(&|p| p.normals.is_some());
+    // every UV set under the `uv` weight, every colour set under `color`
     let uv = w.uv != 0.0 && any(&|p| p.texcoords.is_some());
+    let extra_uv = if w.uv != 0.0 {
+        most(&|p| p.extra_texcoords.len())
+    } else {
+        0
+    };
     let color = w.color != 0.0 && any(&|p| p.colors.is_some());
-    let dims = 3 * usize::from(normal) + 2 * usize::from(uv) + 4 * usize::from(color);
+    let extra_color = if w.color != 0.0 {
+        most(&|p| p.extra_colors.len())
+    } else {
+        0
+    };
+    let dims = 3 * usize::from(normal)
+        + 2 * (usize::from(uv) + extra_uv)
+        + 4 * (usize::from(color) + extra_color);
     let mut out = Vec::with_capacity(dims * flat.positions.len());
     if dims == 0 {
         return (out, 0);
@@ -233,8 +249,16 @@ fn weighted_attributes(mesh: &SourceMesh, flat: &Flat, w: &AttributeWeights) -> 
                 let t = p.texcoords.as_ref().map_or([0.0; 2], |a| a[v]);
                 out.extend(t.map(|x| x * w.uv));
             }
+            for k in 0..extra_uv {
+                let t = p.extra_texcoords.get(k).map_or([0.0; 2], |a| a[v]);
+                out.extend(t.map(|x| x * w.uv));
+            }
             if color {
                 let c = p.colors.as_ref().map_or([1.0; 4], |a| a[v]);
+                out.extend(c.map(|x| x * w.color));
+            }
+            for k in 0..extra_color {
+                let c = p.extra_colors.get(k).map_or([1.0; 4], |a| a[v]);
                 out.extend(c.map(|x| x * w.color));
             }
         }

@@ -565,3 +565,80 @@ fn textured_grid_keeps_its_uv_seam_at_every_level() {
         }
     }
 }
+
+/// A flat 24×24 grid whose only attribute is a second UV set (`TEXCOORD_1`,
+/// e.g. a lightmap) that bends: every collapse is free geometrically, so
+/// any cost comes from pricing that set.
+fn flat_grid_with_lightmap_uvs() -> SourceMesh {
+    let n = 24u32;
+    let mut p = Primitive::default();
+    let mut uv1 = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            p.positions.push([x, y, 0.0]);
+            // a lightmap chart with one sharp local distortion
+            let bump = (-((x - 0.3).powi(2) + (y - 0.6).powi(2)) / 0.01).exp();
+            uv1.push([x + 0.2 * bump, y - 0.2 * bump]);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let (a, w) = (j * (n + 1) + i, n + 1);
+            p.indices
+                .extend_from_slice(&[a, a + 1, a + w + 1, a, a + w + 1, a + w]);
+        }
+    }
+    p.extra_texcoords = vec![uv1];
+    SourceMesh {
+        name: "lightmapped".into(),
+        primitives: vec![p],
+    }
+}
+
+/// RMS distance between the input's `TEXCOORD_1` at its vertices and the
+/// level's, interpolated at the same (x, y) (the grid stays flat at z = 0).
+fn lightmap_error(input: &Primitive, level: &Primitive) -> f64 {
+    let uv = level.extra_texcoords[0].as_slice();
+    let mut sum = 0.0;
+    for (p, want) in input.positions.iter().zip(&input.extra_texcoords[0]) {
+        let got = level
+            .indices
+            .chunks_exact(3)
+            .find_map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| level.positions[t[k] as usize]);
+                let det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+                let l1 = ((p[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (p[1] - a[1])) / det;
+                let l2 = ((b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1])) / det;
+                let l = [1.0 - l1 - l2, l1, l2];
+                l.iter().all(|&x| x >= -1e-5).then(|| {
+                    [0, 1].map(|c| (0..3).map(|k| l[k] * uv[t[k] as usize][c]).sum::<f32>())
+                })
+            })
+            .expect("the level covers the grid");
+        sum += f64::from((got[0] - want[0]).powi(2) + (got[1] - want[1]).powi(2));
+    }
+    (sum / input.positions.len() as f64).sqrt()
+}
+
+#[test]
+fn every_uv_set_is_priced_under_the_uv_weight() {
+    let src = flat_grid_with_lightmap_uvs();
+    let error = |uv: f32| {
+        let opts = BuildOptions {
+            levels: LevelRequest::Specs(vec![LevelSpec::Ratio(0.1)]),
+            attribute_weights: lodgen::lod::AttributeWeights {
+                uv,
+                ..lodgen::lod::AttributeWeights::DEFAULT
+            },
+            ..BuildOptions::default()
+        };
+        let lod = build_one(0, &src, &opts, &mut |_| {}).unwrap().lod;
+        lightmap_error(&src.primitives[0], &lod.levels[0].primitives[0])
+    };
+    let (priced, free) = (error(1.0), error(0.0));
+    eprintln!("TEXCOORD_1 RMS error at 10 %: {priced:.5} priced, {free:.5} with uv = 0");
+    // a flat grid gives geometry no say: only pricing TEXCOORD_1 keeps
+    // vertices where the lightmap bends
+    assert!(priced < 0.5 * free, "priced {priced} vs unpriced {free}");
+}
