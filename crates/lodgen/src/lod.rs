@@ -315,121 +315,122 @@ fn flatten(mesh: &SourceMesh) -> Flat {
 /// its primitive.
 pub fn stream_attributes(mesh: &SourceMesh) -> lodgen_pm::stream::WedgeAttributes {
     use lodgen_pm::stream::{Channel, WedgeAttributes};
-    type Get<'a> = Box<dyn Fn(&Primitive, usize, &mut Vec<f32>) -> bool + 'a>;
     let prims = &mesh.primitives;
-    let most = |f: &dyn Fn(&Primitive) -> usize| prims.iter().map(f).max().unwrap_or(0);
-    let mut chans: Vec<(String, u8, f32, Get)> = Vec::new();
-    fn put<const N: usize, T: Copy + Into<f64>>(
-        a: Option<&Vec<[T; N]>>,
-        v: usize,
-        out: &mut Vec<f32>,
-    ) -> bool {
-        a.and_then(|a| a.get(v)).is_some_and(|x| {
-            out.extend(x.iter().map(|&c| c.into() as f32));
-            true
+    let sets = |f: &dyn Fn(&Primitive) -> usize| prims.iter().map(f).max().unwrap_or(0);
+    // set indices as named (a primitive may have COLOR_1 without COLOR_0);
+    // absent ones are filtered out below
+    let (uvs, colors, joints) = (
+        1 + sets(&|p| p.extra_texcoords.len()),
+        1 + sets(&|p| p.extra_colors.len()),
+        1 + sets(&|p| p.extra_joints.len()),
+    );
+    let candidates = [Attr::Normal, Attr::Tangent]
+        .into_iter()
+        .chain((0..uvs).map(Attr::Uv))
+        .chain((0..colors).map(Attr::Color))
+        .chain((0..joints).flat_map(|i| [Attr::Joints(i), Attr::Weights(i)]));
+    let present: Vec<Attr> = candidates
+        .filter(|&a| {
+            prims
+                .iter()
+                .any(|p| a.fetch(p, 0, &mut Vec::new()).is_some())
         })
-    }
-    if prims.iter().any(|p| p.normals.is_some()) {
-        chans.push((
-            "NORMAL".into(),
-            3,
-            0.0,
-            Box::new(|p, v, o| put(p.normals.as_ref(), v, o)),
-        ));
-    }
-    if prims.iter().any(|p| p.tangents.is_some()) {
-        chans.push((
-            "TANGENT".into(),
-            4,
-            0.0,
-            Box::new(|p, v, o| put(p.tangents.as_ref(), v, o)),
-        ));
-    }
-    if prims.iter().any(|p| p.texcoords.is_some()) {
-        chans.push((
-            "TEXCOORD_0".into(),
-            2,
-            0.0,
-            Box::new(|p, v, o| put(p.texcoords.as_ref(), v, o)),
-        ));
-    }
-    for i in 0..most(&|p| p.extra_texcoords.len()) {
-        chans.push((
-            format!("TEXCOORD_{}", i + 1),
-            2,
-            0.0,
-            Box::new(move |p, v, o| put(p.extra_texcoords.get(i), v, o)),
-        ));
-    }
-    if prims.iter().any(|p| p.colors.is_some()) {
-        chans.push((
-            "COLOR_0".into(),
-            4,
-            1.0,
-            Box::new(|p, v, o| put(p.colors.as_ref(), v, o)),
-        ));
-    }
-    for i in 0..most(&|p| p.extra_colors.len()) {
-        chans.push((
-            format!("COLOR_{}", i + 1),
-            4,
-            1.0,
-            Box::new(move |p, v, o| put(p.extra_colors.get(i), v, o)),
-        ));
-    }
-    if prims.iter().any(|p| p.joints.is_some()) {
-        chans.push((
-            "JOINTS_0".into(),
-            4,
-            0.0,
-            Box::new(|p, v, o| put(p.joints.as_ref(), v, o)),
-        ));
-        chans.push((
-            "WEIGHTS_0".into(),
-            4,
-            0.0,
-            Box::new(|p, v, o| put(p.weights.as_ref(), v, o)),
-        ));
-    }
-    for i in 0..most(&|p| p.extra_joints.len()) {
-        chans.push((
-            format!("JOINTS_{}", i + 1),
-            4,
-            0.0,
-            Box::new(move |p, v, o| put(p.extra_joints.get(i), v, o)),
-        ));
-        chans.push((
-            format!("WEIGHTS_{}", i + 1),
-            4,
-            0.0,
-            Box::new(move |p, v, o| put(p.extra_weights.get(i), v, o)),
-        ));
-    }
+        .collect();
     let count: usize = prims.iter().map(|p| p.positions.len()).sum();
-    let stride: usize = chans.iter().map(|c| usize::from(c.1)).sum();
+    let stride: usize = present.iter().map(|a| a.components()).sum();
     let mut values = Vec::with_capacity(count * stride);
     let mut groups = Vec::with_capacity(count);
     for (pi, p) in prims.iter().enumerate() {
         for v in 0..p.positions.len() {
-            for (_, n, missing, get) in &chans {
-                if !get(p, v, &mut values) {
-                    values.extend(std::iter::repeat_n(*missing, usize::from(*n)));
+            for a in &present {
+                if a.fetch(p, v, &mut values).is_none() {
+                    // white for a missing colour, zeros otherwise
+                    let missing = if matches!(a, Attr::Color(_)) {
+                        1.0
+                    } else {
+                        0.0
+                    };
+                    values.extend(std::iter::repeat_n(missing, a.components()));
                 }
             }
             groups.push(pi as u32);
         }
     }
     WedgeAttributes {
-        channels: chans
+        channels: present
             .iter()
-            .map(|(name, components, _, _)| Channel {
-                name: name.clone(),
-                components: *components,
+            .map(|a| Channel {
+                name: a.name(),
+                components: a.components() as u8,
             })
             .collect(),
         values,
         groups,
         count,
+    }
+}
+
+/// One glTF vertex attribute set of a [`Primitive`].
+#[derive(Clone, Copy, Debug)]
+enum Attr {
+    Normal,
+    Tangent,
+    Uv(usize),
+    Color(usize),
+    Joints(usize),
+    Weights(usize),
+}
+
+impl Attr {
+    fn name(self) -> String {
+        match self {
+            Attr::Normal => "NORMAL".into(),
+            Attr::Tangent => "TANGENT".into(),
+            Attr::Uv(i) => format!("TEXCOORD_{i}"),
+            Attr::Color(i) => format!("COLOR_{i}"),
+            Attr::Joints(i) => format!("JOINTS_{i}"),
+            Attr::Weights(i) => format!("WEIGHTS_{i}"),
+        }
+    }
+
+    fn components(self) -> usize {
+        match self {
+            Attr::Normal => 3,
+            Attr::Uv(_) => 2,
+            _ => 4,
+        }
+    }
+
+    /// Append vertex `v`'s values as `f32` (joints exactly); `None` when
+    /// `p` lacks the set (or the vertex).
+    fn fetch(self, p: &Primitive, v: usize, out: &mut Vec<f32>) -> Option<()> {
+        fn put<const N: usize, T: Copy + Into<f64>>(
+            set: Option<&Vec<[T; N]>>,
+            v: usize,
+            out: &mut Vec<f32>,
+        ) -> Option<()> {
+            out.extend(set?.get(v)?.iter().map(|&c| c.into() as f32));
+            Some(())
+        }
+        fn nth<'a, X>(
+            first: &'a Option<Vec<X>>,
+            extra: &'a [Vec<X>],
+            i: usize,
+        ) -> Option<&'a Vec<X>> {
+            if i == 0 {
+                first.as_ref()
+            } else {
+                extra.get(i - 1)
+            }
+        }
+        match self {
+            Attr::Normal => put(p.normals.as_ref(), v, out),
+            Attr::Tangent => put(p.tangents.as_ref(), v, out),
+            Attr::Uv(i) => put(nth(&p.texcoords, &p.extra_texcoords, i), v, out),
+            Attr::Color(i) => put(nth(&p.colors, &p.extra_colors, i), v, out),
+            Attr::Joints(i) => put(nth(&p.joints, &p.extra_joints, i), v, out),
+            Attr::Weights(i) => put(nth(&p.weights, &p.extra_weights, i), v, out),
+        }
     }
 }
 

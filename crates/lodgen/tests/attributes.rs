@@ -642,3 +642,39 @@ fn every_uv_set_is_priced_under_the_uv_weight() {
     // vertices where the lightmap bends
     assert!(priced < 0.5 * free, "priced {priced} vs unpriced {free}");
 }
+
+/// The stream's attribute table: every set some primitive has, by its glTF
+/// name, the input's values exactly, padding where a primitive lacks a set
+/// (white for colours, zeros otherwise), the primitive as the group.
+#[test]
+fn stream_attributes_carry_every_set_of_every_primitive() {
+    let mut src = eight_influence_strip();
+    let bare = Primitive {
+        positions: src.primitives[0].positions.clone(),
+        indices: src.primitives[0].indices.clone(),
+        ..Primitive::default()
+    };
+    src.primitives.push(bare);
+    let a = lodgen::lod::stream_attributes(&src);
+    let names: Vec<&str> = a.channels.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["COLOR_1", "JOINTS_0", "WEIGHTS_0", "JOINTS_1", "WEIGHTS_1"]
+    );
+    let p = &src.primitives[0];
+    let n = p.positions.len();
+    assert_eq!(a.count, 2 * n);
+    for v in 0..n {
+        let mut want: Vec<f32> = p.extra_colors[0][v].to_vec();
+        want.extend(p.joints.as_ref().unwrap()[v].map(f32::from));
+        want.extend(p.weights.as_ref().unwrap()[v]);
+        want.extend(p.extra_joints[0][v].map(f32::from));
+        want.extend(p.extra_weights[0][v]);
+        assert_eq!(a.wedge(v as u32), want.as_slice(), "vertex {v}");
+        assert_eq!(a.group(v as u32), 0);
+        let pad = a.wedge((n + v) as u32);
+        assert_eq!(&pad[..4], &[1.0; 4]);
+        assert!(pad[4..].iter().all(|&x| x == 0.0));
+        assert_eq!(a.group((n + v) as u32), 1);
+    }
+}
