@@ -23,7 +23,8 @@ use crate::{cli, io, progressive};
 use anyhow::Context;
 use lodgen_pm::levels::{splits_for, LevelSpec};
 use lodgen_pm::stream::{
-    decode, decode_with_attributes, encode, encode_with_attributes, EncodeOptions, WedgeAttributes,
+    decode, decode_with_attributes, encode, encode_with_attributes, EncodeError, EncodeOptions,
+    WedgeAttributes,
 };
 use lodgen_pm::{simplify, ProgressiveMesh, SimplifyOptions};
 use serde_json::{json, Value};
@@ -130,15 +131,27 @@ fn pipeline_coverage(pm: &ProgressiveMesh, levels: &[usize], diagonal: f64) -> V
 /// The pipeline's levels, finest first (ratios of the input).
 const PIPELINE_RATIOS: [f64; 4] = [1.0, 0.5, 0.1, 0.02];
 
-/// The pipeline's level record counts and their screen coverage.
-fn pipeline_levels(pm: &ProgressiveMesh) -> (Vec<usize>, Vec<f64>) {
+/// The pipeline's [`ViewData`] of `pm`: its levels at [`PIPELINE_RATIOS`],
+/// their screen coverage, and the stream `encode` makes with them.
+fn pipeline_data(
+    name: String,
+    pm: &ProgressiveMesh,
+    encode: impl FnOnce(&ProgressiveMesh, &[usize]) -> Result<Vec<u8>, EncodeError>,
+) -> anyhow::Result<ViewData> {
     let levels: Vec<usize> = PIPELINE_RATIOS
         .iter()
         .map(|&r| splits_for(pm, LevelSpec::Ratio(r)))
         .collect();
     let diagonal = pm.mesh_at_splits(pm.len()).diagonal();
-    let coverage = pipeline_coverage(pm, &levels, diagonal);
-    (levels, coverage)
+    let screen_coverage = pipeline_coverage(pm, &levels, diagonal);
+    let stream = encode(pm, &levels).with_context(|| format!("encoding the stream of {name}"))?;
+    Ok(ViewData {
+        name,
+        stream,
+        levels,
+        screen_coverage,
+        source: "pipeline",
+    })
 }
 
 impl ViewData {
@@ -195,16 +208,8 @@ impl ViewData {
             &crate::lod::AttributeWeights::DEFAULT,
         )
         .with_context(|| format!("simplifying {name}"))?;
-        let pm = out.pm;
-        let (levels, screen_coverage) = pipeline_levels(&pm);
-        let stream = encode_with_attributes(&pm, &levels, EncodeOptions::DEFAULT, attributes)
-            .with_context(|| format!("encoding the stream of {name}"))?;
-        Ok(ViewData {
-            name,
-            stream,
-            levels,
-            screen_coverage,
-            source: "pipeline",
+        pipeline_data(name, &out.pm, |pm, levels| {
+            encode_with_attributes(pm, levels, EncodeOptions::DEFAULT, attributes)
         })
     }
 
@@ -221,15 +226,8 @@ impl ViewData {
             &SimplifyOptions::DEFAULT.with_target_ratio(PIPELINE_RATIOS[3]),
         )
         .with_context(|| format!("simplifying {name}"))?;
-        let pm = out.pm;
-        let (levels, screen_coverage) = pipeline_levels(&pm);
-        let stream = encode(&pm, &levels, EncodeOptions::DEFAULT);
-        Ok(ViewData {
-            name,
-            stream,
-            levels,
-            screen_coverage,
-            source: "pipeline",
+        pipeline_data(name, &out.pm, |pm, levels| {
+            Ok(encode(pm, levels, EncodeOptions::DEFAULT))
         })
     }
 
