@@ -8,7 +8,7 @@
 
 use crate::adjacency::{FanLookup, Fans};
 use crate::features::{AttributeCost, Features};
-use crate::heap::{bucket_sort_parts, f32_order_key, QuadHeap};
+use crate::heap::{f32_order_key, Buckets, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
@@ -245,8 +245,10 @@ struct Pass {
     number: u32,
     /// Whether `queue` is a started pass (false after a rebuild).
     open: bool,
-    /// The pass's candidates, sorted; `cursor` is the next one.
+    /// The pass's candidates, bucketed by cost and sorted as far as
+    /// `buckets` says; `cursor` is the next one.
     queue: Vec<PassEntry>,
+    buckets: Buckets,
     cursor: usize,
     /// Vertex → the last pass that moved or removed it.
     touched: Vec<u32>,
@@ -259,6 +261,19 @@ struct Pass {
     /// a sixth of its goal, as meshoptimizer does, so that a pass whose
     /// cheap pairs were all blocked still makes progress).
     cost_limit: f32,
+}
+
+/// A pass entry's bucket: the top 11 bits of its cost's order key.
+#[inline]
+fn pass_bucket(cost: f32) -> usize {
+    (f32_order_key(cost) >> 21) as usize
+}
+
+/// The order of a pass: by cost (`total_cmp`). Sorted stably from
+/// entries generated in (a, b) order, this is the total order (cost, a, b).
+#[inline]
+fn pass_order(x: &PassEntry, y: &PassEntry) -> Ordering {
+    f32_order_key(x.cost).cmp(&f32_order_key(y.cost))
 }
 
 #[inline]
@@ -579,6 +594,7 @@ impl Simplifier {
         if self.opts.schedule != Schedule::Greedy {
             // the next step starts a fresh pass
             self.pass.queue.clear();
+            self.pass.buckets = Buckets::default();
             self.pass.cursor = 0;
             self.pass.open = false;
             return;
@@ -696,6 +712,10 @@ impl Simplifier {
                 }
                 continue;
             }
+            if pass.cursor >= pass.buckets.sorted_end() {
+                pass.buckets
+                    .sort_through(&mut pass.queue, pass.cursor, pass_order);
+            }
             let e = pass.queue[pass.cursor];
             if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
                 pass.cursor = pass.queue.len();
@@ -768,6 +788,9 @@ impl Simplifier {
                             add(x);
                         }
                     }
+                    // in (a, b) order: the buckets keep it, and a stable
+                    // sort by cost then gives the total order
+                    nb.sort_unstable();
                     for &x in &nb {
                         if !(this.locked[vi] && this.locked[x as usize]) {
                             out.push(PassEntry {
@@ -782,26 +805,23 @@ impl Simplifier {
             })
             .collect();
         let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
-        bucket_sort_parts(
-            parts,
-            &mut queue,
-            |e| (f32_order_key(e.cost) >> 21) as usize,
-            |x, y| {
-                x.cost
-                    .total_cmp(&y.cost)
-                    .then(x.a.cmp(&y.a))
-                    .then(x.b.cmp(&y.b))
-            },
-        );
+        let mut buckets = Buckets::scatter(parts, &mut queue, |e| pass_bucket(e.cost));
         let goal = self.live_tris.saturating_sub(self.target);
         // most contractions remove two triangles
-        let limit = queue
-            .get(goal / 2)
-            .map_or(f32::INFINITY, |e| e.cost * factor);
+        let limit = if goal / 2 < queue.len() {
+            buckets.sort_through(&mut queue, goal / 2, pass_order);
+            queue[goal / 2].cost * factor
+        } else {
+            f32::INFINITY
+        };
+        // the pass (nearly always) stops at the limit: sort up to it now,
+        // in parallel, the rest only if the walk gets there
+        buckets.sort_through_bucket(&mut queue, pass_bucket(limit), pass_order);
         let pass = &mut self.pass;
         pass.number += 1;
         pass.open = true;
         pass.queue = queue;
+        pass.buckets = buckets;
         pass.cursor = 0;
         pass.goal = goal;
         pass.removed = 0;
