@@ -752,7 +752,8 @@ impl Simplifier {
     /// but the mesh (not on the thread count).
     fn start_pass(&mut self, factor: f32) {
         let t0 = Instant::now();
-        if self.pass.number == 0 || self.vtris.half_dead() {
+        // (the fans `new` builds are compact: the first pass needs no rebuild)
+        if self.vtris.half_dead() {
             self.vtris.rebuild(&self.tris, &self.tri_alive);
         }
         const CHUNK: usize = 2048;

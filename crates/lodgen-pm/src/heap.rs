@@ -148,39 +148,85 @@ impl Buckets {
 
     /// Move the concatenation of `parts` into `out`, grouped by
     /// `bucket(item)` (items of a lower bucket first; within a bucket in
-    /// the parts' order). The parts are freed as they are moved, and no
-    /// second buffer is needed (unlike an LSD radix sort; peak memory: the
-    /// first contraction pass's list is the largest allocation of a run).
-    pub fn scatter<T: Copy>(
+    /// the parts' order). In parallel: the buckets are split into one
+    /// contiguous run per thread, each thread reads every part and writes
+    /// its run's items (the result does not depend on the split). No second
+    /// buffer besides `out` is needed (unlike an LSD radix sort; peak
+    /// memory: the first contraction pass's list is the largest
+    /// allocation of a run).
+    pub fn scatter<T: Copy + Send + Sync>(
         parts: Vec<Vec<T>>,
         out: &mut Vec<T>,
-        bucket: impl Fn(&T) -> usize,
+        bucket: impl Fn(&T) -> usize + Sync,
     ) -> Buckets {
+        use rayon::prelude::*;
         let n: usize = parts.iter().map(Vec::len).sum();
         out.clear();
         let Some(&first) = parts.iter().find_map(|p| p.first()) else {
             return Buckets::default();
         };
-        let mut counts = vec![0usize; Self::COUNT];
-        for it in parts.iter().flatten() {
-            counts[bucket(it)] += 1;
-        }
-        let mut next = Vec::with_capacity(Self::COUNT);
+        let counts = parts
+            .par_iter()
+            .fold(
+                || vec![0usize; Self::COUNT],
+                |mut c, part| {
+                    for it in part {
+                        c[bucket(it)] += 1;
+                    }
+                    c
+                },
+            )
+            .reduce(
+                || vec![0usize; Self::COUNT],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x += y;
+                    }
+                    a
+                },
+            );
+        let mut starts = Vec::with_capacity(Self::COUNT + 1);
         let mut sum = 0;
         for &c in &counts {
-            next.push(sum);
+            starts.push(sum);
             sum += c;
         }
+        starts.push(sum);
         out.resize(n, first);
-        for part in parts {
-            for it in &part {
-                let b = bucket(it);
-                out[next[b]] = *it;
-                next[b] += 1;
+        // bucket runs of about equal item counts, one per thread
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let mut cuts = vec![0usize];
+        for k in 1..threads {
+            let target = n * k / threads;
+            let b = starts.partition_point(|&x| x < target).min(Self::COUNT);
+            if b > *cuts.last().unwrap_or(&0) {
+                cuts.push(b);
             }
         }
+        cuts.push(Self::COUNT);
+        let mut runs: Vec<(usize, usize, &mut [T])> = Vec::with_capacity(cuts.len());
+        let mut rest = &mut out[..];
+        for w in cuts.windows(2) {
+            let (head, tail) = rest.split_at_mut(starts[w[1]] - starts[w[0]]);
+            runs.push((w[0], w[1], head));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each(|(lo, hi, dst)| {
+            let base = starts[lo];
+            let mut next: Vec<usize> = starts[lo..hi].iter().map(|&x| x - base).collect();
+            for it in parts.iter().flatten() {
+                let b = bucket(it);
+                if (lo..hi).contains(&b) {
+                    let slot = &mut next[b - lo];
+                    dst[*slot] = *it;
+                    *slot += 1;
+                }
+            }
+        });
+        drop(parts);
+        starts.remove(0);
         Buckets {
-            ends: next,
+            ends: starts,
             sorted: 0,
         }
     }
