@@ -55,41 +55,78 @@ impl FanLookup for Fans {
 impl Fans {
     /// The fans of `vertex_count` vertices over the triangles for which
     /// `alive(t)` holds.
-    pub fn new(vertex_count: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool) -> Fans {
+    pub fn new(
+        vertex_count: usize,
+        tris: &[[u32; 3]],
+        alive: impl Fn(usize) -> bool + Sync,
+    ) -> Fans {
         let mut f = Fans::default();
         f.build(vertex_count, tris, alive);
         f
     }
 
-    fn build(&mut self, nv: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool) {
+    /// In parallel: the vertices are split into one range per thread, and
+    /// each thread reads every triangle and fills its range's lists (each
+    /// list in triangle order: the result does not depend on the split).
+    fn build(&mut self, nv: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool + Sync) {
+        use rayon::prelude::*;
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let cuts: Vec<usize> = (0..=threads).map(|k| nv * k / threads).collect();
         let offsets = &mut self.offsets;
         offsets.clear();
         offsets.resize(nv + 1, 0);
-        for (t, tri) in tris.iter().enumerate() {
-            if alive(t) {
-                for &v in tri {
-                    offsets[v as usize + 1] += 1;
+        let mut runs = Vec::with_capacity(threads);
+        let mut rest = &mut offsets[1..];
+        for w in cuts.windows(2) {
+            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+            runs.push((w[0], head));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each(|(lo, counts)| {
+            for (t, tri) in tris.iter().enumerate() {
+                if alive(t) {
+                    for &v in tri {
+                        if let Some(c) =
+                            (v as usize).checked_sub(lo).and_then(|i| counts.get_mut(i))
+                        {
+                            *c += 1;
+                        }
+                    }
                 }
             }
-        }
+        });
         for v in 0..nv {
             offsets[v + 1] += offsets[v];
         }
         let total = offsets[nv] as usize;
         self.list.clear();
         self.list.resize(total, 0);
-        // fill with a moving cursor per vertex (offsets[v] advances, then is
-        // restored by shifting)
-        let mut next: Vec<u32> = offsets[..nv].to_vec();
-        for (t, tri) in tris.iter().enumerate() {
-            if alive(t) {
-                for &v in tri {
-                    let slot = &mut next[v as usize];
-                    self.list[*slot as usize] = t as u32;
-                    *slot += 1;
+        let offsets = &self.offsets;
+        let mut runs = Vec::with_capacity(threads);
+        let mut rest = &mut self.list[..];
+        for w in cuts.windows(2) {
+            let (lo, hi) = (w[0], w[1]);
+            let (head, tail) = rest.split_at_mut((offsets[hi] - offsets[lo]) as usize);
+            runs.push((lo, hi, head));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each(|(lo, hi, dst)| {
+            // a moving cursor per vertex, relative to the run
+            let base = offsets[lo];
+            let mut next: Vec<u32> = offsets[lo..hi].iter().map(|&o| o - base).collect();
+            for (t, tri) in tris.iter().enumerate() {
+                if alive(t) {
+                    for &v in tri {
+                        if let Some(slot) =
+                            (v as usize).checked_sub(lo).and_then(|i| next.get_mut(i))
+                        {
+                            dst[*slot as usize] = t as u32;
+                            *slot += 1;
+                        }
+                    }
                 }
             }
-        }
+        });
         self.over.clear();
         self.over.resize(nv, CSR);
         self.arena.clear();

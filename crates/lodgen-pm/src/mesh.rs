@@ -5,6 +5,7 @@
 //!
 //! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
 
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// An indexed triangle mesh: `f32` positions, `u32` corner indices.
@@ -148,7 +149,7 @@ impl Prepared {
         };
         let mut keys: Vec<u64> = m
             .positions
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, p)| {
                 let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) * scale) as u32).min(1023));
@@ -156,7 +157,9 @@ impl Prepared {
                 u64::from(code) << 32 | i as u64
             })
             .collect();
-        keys.sort_unstable();
+        // unique keys (the index is part of them): the same order whatever
+        // the thread count
+        keys.par_sort_unstable();
         let mut rank = vec![0u32; nv];
         let positions: Vec<[f32; 3]> = keys
             .iter()
