@@ -86,8 +86,7 @@ fn main() {
         let base = peak_kb();
         let per_tri = |kb: u64| (kb.saturating_sub(base) * 1024) as f64 / n as f64;
         let t = Instant::now();
-        let mut p = prepare(&m.positions, &indices).unwrap();
-        p.sort_for_locality();
+        let p = prepare(&m.positions, &indices).unwrap();
         let t_prepare = t.elapsed();
         let m_prepare = per_tri(peak_kb());
         let mut s = Simplifier::from_mesh(p.mesh, &opts).unwrap();

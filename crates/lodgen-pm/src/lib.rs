@@ -59,8 +59,7 @@ pub use vsplit::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, Wedg
 pub struct Simplified {
     pub pm: ProgressiveMesh,
     /// Input vertex → welded vertex (`u32::MAX` if unused); the progressive
-    /// mesh's `vertex_origin` maps into the welded numbering, which is
-    /// [`prepare`]'s followed by [`Prepared::sort_for_locality`].
+    /// mesh's `vertex_origin` maps into the welded numbering.
     pub vertex_map: Vec<u32>,
     /// Welded triangle → input triangle.
     pub triangle_map: Vec<u32>,
@@ -75,8 +74,7 @@ pub fn simplify(
     indices: &[u32],
     opts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
-    let mut prepared = prepare(positions, indices)?;
-    prepared.sort_for_locality();
+    let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     let stop = s.run();
     let (pm, stats) = s.finish();
@@ -117,8 +115,7 @@ pub fn simplify_with_wedges(
             vertex_count: positions.len(),
         });
     }
-    let mut prepared = prepare(positions, indices)?;
-    prepared.sort_for_locality();
+    let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     let wedges = prepared
         .triangle_map

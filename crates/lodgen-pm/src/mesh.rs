@@ -5,7 +5,6 @@
 //!
 //! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
 
-use rayon::prelude::*;
 use thiserror::Error;
 
 /// An indexed triangle mesh: `f32` positions, `u32` corner indices.
@@ -118,88 +117,6 @@ impl Mesh {
     /// Flat index list.
     pub fn indices(&self) -> Vec<u32> {
         self.triangles.iter().flatten().copied().collect()
-    }
-}
-
-impl Prepared {
-    /// Renumber the welded mesh for memory locality: vertices along a
-    /// Morton (Z-order) curve through the bounding cube, triangles by their
-    /// lowest new corner (ties keep their order). A vertex's neighbours and
-    /// triangles then sit close together in every per-vertex and
-    /// per-triangle array of the simplifier, whose contraction walk visits
-    /// the mesh in cost order, i.e. at random. `vertex_map` and
-    /// `triangle_map` are updated to the new numbering; corner order (and
-    /// so orientation) is kept. Deterministic (integer keys, ties by old
-    /// index).
-    pub fn sort_for_locality(&mut self) {
-        let m = &mut self.mesh;
-        let nv = m.positions.len();
-        let Some((lo, hi)) = m.bounds() else {
-            return;
-        };
-        let extent = (0..3).map(|i| hi[i] - lo[i]).fold(0.0f32, f32::max);
-        let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
-        let spread = |x: u32| {
-            // 10 bits → every third bit of 30
-            let mut x = x & 0x3ff;
-            x = (x | (x << 16)) & 0x0300_00ff;
-            x = (x | (x << 8)) & 0x0300_f00f;
-            x = (x | (x << 4)) & 0x030c_30c3;
-            (x | (x << 2)) & 0x0924_9249
-        };
-        let mut keys: Vec<u64> = m
-            .positions
-            .par_iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) * scale) as u32).min(1023));
-                let code = spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2;
-                u64::from(code) << 32 | i as u64
-            })
-            .collect();
-        // unique keys (the index is part of them): the same order whatever
-        // the thread count
-        keys.par_sort_unstable();
-        let mut rank = vec![0u32; nv];
-        let positions: Vec<[f32; 3]> = keys
-            .iter()
-            .enumerate()
-            .map(|(new, &k)| {
-                let old = k as u32 as usize;
-                rank[old] = new as u32;
-                m.positions[old]
-            })
-            .collect();
-        drop(keys);
-        m.positions = positions;
-        for v in &mut self.vertex_map {
-            if *v != u32::MAX {
-                *v = rank[*v as usize];
-            }
-        }
-        for t in &mut m.triangles {
-            *t = t.map(|v| rank[v as usize]);
-        }
-        drop(rank);
-        // counting sort of the triangles by lowest corner
-        let mut start = vec![0u32; nv + 1];
-        for t in &m.triangles {
-            start[t[0].min(t[1]).min(t[2]) as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            start[v + 1] += start[v];
-        }
-        let nt = m.triangles.len();
-        let mut triangles = vec![[0u32; 3]; nt];
-        let mut triangle_map = vec![0u32; nt];
-        for (t, tri) in m.triangles.iter().enumerate() {
-            let slot = &mut start[tri[0].min(tri[1]).min(tri[2]) as usize];
-            triangles[*slot as usize] = *tri;
-            triangle_map[*slot as usize] = self.triangle_map[t];
-            *slot += 1;
-        }
-        m.triangles = triangles;
-        self.triangle_map = triangle_map;
     }
 }
 
@@ -408,34 +325,6 @@ mod tests {
         assert_eq!(r.stats.welded_vertices, 3);
         assert_eq!(r.vertex_map[6], u32::MAX);
         assert_eq!(r.vertex_map[7], 0);
-    }
-
-    #[test]
-    fn sorting_for_locality_keeps_the_maps_true() {
-        let m = crate::shapes::torus(1.0, 0.3, 12, 7);
-        let idx = m.indices();
-        let mut r = prepare(&m.positions, &idx).unwrap();
-        let before = r.clone();
-        r.sort_for_locality();
-        assert_eq!(r.mesh.positions.len(), before.mesh.positions.len());
-        for (i, p) in m.positions.iter().enumerate() {
-            assert_eq!(r.mesh.positions[r.vertex_map[i] as usize], *p);
-        }
-        let mut seen = vec![false; idx.len() / 3];
-        for (t, &i) in r.mesh.triangles.iter().zip(&r.triangle_map) {
-            let input = [0, 1, 2].map(|k| r.vertex_map[idx[3 * i as usize + k] as usize]);
-            assert_eq!(*t, input, "corner order and orientation kept");
-            assert!(!std::mem::replace(&mut seen[i as usize], true));
-        }
-        assert!(seen.iter().all(|&s| s));
-        // triangles by lowest corner
-        let lowest: Vec<u32> = r
-            .mesh
-            .triangles
-            .iter()
-            .map(|t| t[0].min(t[1]).min(t[2]))
-            .collect();
-        assert!(lowest.windows(2).all(|w| w[0] <= w[1]));
     }
 
     #[test]

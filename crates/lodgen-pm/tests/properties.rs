@@ -136,8 +136,7 @@ proptest! {
     #[test]
     fn random_meshes_simplify_cleanly(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.9, greedy in any::<bool>()) {
         let m = random_mesh(kind, seed);
-        let mut welded = prepare(&m.positions, &m.indices()).unwrap();
-        welded.sort_for_locality();
+        let welded = prepare(&m.positions, &m.indices()).unwrap();
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio).with_schedule(schedule(greedy));
         let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
         check_levels(&out.pm, true);
@@ -188,8 +187,7 @@ fn cow_simplifies_cleanly_and_replays_exactly() {
         return;
     };
     let (p, idx) = common::read_obj(&text);
-    let mut welded = prepare(&p, &idx).unwrap();
-    welded.sort_for_locality();
+    let welded = prepare(&p, &idx).unwrap();
     assert_eq!(welded.mesh.triangles.len(), 5804);
     for ratio in [0.5, 0.1, 0.02] {
         let out = simplify(&p, &idx, &SimplifyOptions::DEFAULT.with_target_ratio(ratio)).unwrap();
