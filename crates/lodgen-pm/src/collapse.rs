@@ -315,13 +315,21 @@ impl Simplifier {
             Boundary::Weighted(w) => w,
             Boundary::Locked => 0.0,
         };
+        // Each face's plane once, not once per corner (the same sums, a
+        // third of the square roots and divisions).
+        let planes: Vec<Plane> = mesh
+            .triangles
+            .par_iter()
+            .map(|t| face_plane(&mesh.positions, t, opts.area_weighted))
+            .collect();
         let (quadric, (boundary, locked)): (Vec<Quadric>, (Vec<bool>, Vec<bool>)) = (0..nv as u32)
             .into_par_iter()
             .map(|v| {
-                let i = classify_vertex(&mesh, vtris.fan(v), v, opts, boundary_weight);
+                let i = classify_vertex(&mesh, &planes, vtris.fan(v), v, opts, boundary_weight);
                 (i.quadric, (i.boundary, i.locked))
             })
             .unzip();
+        drop(planes);
         let tau = opts.tau_for(mesh.diagonal());
         // Sorted edges (only the greedy heap and τ pairs need the list).
         let mut edges: Vec<(u32, u32)> = if opts.schedule == Schedule::Greedy || tau > 0.0 {
@@ -1132,6 +1140,7 @@ struct VertexInfo {
 /// border edge, the constraint plane through it (GH97 §6.1).
 fn classify_vertex(
     mesh: &Mesh,
+    planes: &[Plane],
     ts: &[u32],
     v: u32,
     opts: &SimplifyOptions,
@@ -1145,13 +1154,9 @@ fn classify_vertex(
         let k = tri.iter().position(|&x| x == v).unwrap_or(0);
         uses.push((tri[(k + 1) % 3], 1, i as u32));
         uses.push((tri[(k + 2) % 3], 0, i as u32));
-        let [p0, p1, p2] = tri.map(|x| dv(mesh.positions[x as usize]));
-        let n = (p1 - p0).cross(p2 - p0);
-        let len = n.length();
-        if len > 0.0 {
-            let unit = n / len;
-            let w = if opts.area_weighted { 0.5 * len } else { 1.0 };
-            quadric += Quadric::from_plane(unit, -unit.dot(p0), w);
+        let [nx, ny, nz, d, w] = planes[t as usize];
+        if w > 0.0 {
+            quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
         }
     }
     uses.sort_unstable();
@@ -1211,6 +1216,24 @@ fn classify_vertex(
         quadric,
         boundary,
         locked,
+    }
+}
+
+/// A face's plane `[n.x, n.y, n.z, d, weight]` (unit normal, `n·x + d =
+/// 0`), weight 0 when the face has no area.
+type Plane = [f64; 5];
+
+/// The plane of triangle `t`, weighted by its area or 1.
+fn face_plane(positions: &[[f32; 3]], t: &[u32; 3], area_weighted: bool) -> Plane {
+    let [p0, p1, p2] = t.map(|x| dv(positions[x as usize]));
+    let n = (p1 - p0).cross(p2 - p0);
+    let len = n.length();
+    if len > 0.0 {
+        let unit = n / len;
+        let w = if area_weighted { 0.5 * len } else { 1.0 };
+        [unit.x, unit.y, unit.z, -unit.dot(p0), w]
+    } else {
+        [0.0; 5]
     }
 }
 
