@@ -25,29 +25,32 @@ impl FanLookup for [Vec<u32>] {
     }
 }
 
-const CSR: u32 = u32::MAX;
+/// The bit of a span's length that says the list is in the arena.
+const ARENA: u32 = 1 << 31;
 
 /// Vertex → triangles: a CSR array plus rewritten lists (module docs).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Fans {
-    offsets: Vec<u32>,
+    /// Vertex → `[start, len]` of its list: in `list`, or in `arena` when
+    /// `len` has the [`ARENA`] bit. One load finds a list (a lookup is on
+    /// the contraction walk's critical path of cache misses).
+    span: Vec<[u32; 2]>,
     list: Vec<u32>,
-    /// Vertex → start of its rewritten list in `arena` (`[len, t…]`), or
-    /// `CSR`.
-    over: Vec<u32>,
     arena: Vec<u32>,
+    /// Lists written to the arena (the schedule's compaction trigger counts
+    /// one word per list on top of their triangles).
+    rewritten: usize,
 }
 
 impl FanLookup for Fans {
     #[inline]
     fn fan(&self, v: u32) -> &[u32] {
-        let o = self.over[v as usize];
-        if o == CSR {
-            let v = v as usize;
-            &self.list[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+        let [start, len] = self.span[v as usize];
+        let s = start as usize;
+        if len & ARENA == 0 {
+            &self.list[s..s + len as usize]
         } else {
-            let s = o as usize + 1;
-            &self.arena[s..s + self.arena[o as usize] as usize]
+            &self.arena[s..s + (len & !ARENA) as usize]
         }
     }
 }
@@ -55,68 +58,114 @@ impl FanLookup for Fans {
 impl Fans {
     /// The fans of `vertex_count` vertices over the triangles for which
     /// `alive(t)` holds.
-    pub fn new(vertex_count: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool) -> Fans {
+    pub fn new(
+        vertex_count: usize,
+        tris: &[[u32; 3]],
+        alive: impl Fn(usize) -> bool + Sync,
+    ) -> Fans {
         let mut f = Fans::default();
         f.build(vertex_count, tris, alive);
         f
     }
 
-    fn build(&mut self, nv: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool) {
-        let offsets = &mut self.offsets;
-        offsets.clear();
-        offsets.resize(nv + 1, 0);
-        for (t, tri) in tris.iter().enumerate() {
-            if alive(t) {
-                for &v in tri {
-                    offsets[v as usize + 1] += 1;
+    /// In parallel: the vertices are split into one range per thread, and
+    /// each thread reads every triangle and fills its range's lists (each
+    /// list in triangle order: the result does not depend on the split).
+    fn build(&mut self, nv: usize, tris: &[[u32; 3]], alive: impl Fn(usize) -> bool + Sync) {
+        use rayon::prelude::*;
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let cuts: Vec<usize> = (0..=threads).map(|k| nv * k / threads).collect();
+        let span = &mut self.span;
+        span.clear();
+        span.resize(nv, [0, 0]);
+        let mut runs = Vec::with_capacity(threads);
+        let mut rest = &mut span[..];
+        for w in cuts.windows(2) {
+            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+            runs.push((w[0], head));
+            rest = tail;
+        }
+        // lengths
+        runs.into_par_iter().for_each(|(lo, spans)| {
+            for (t, tri) in tris.iter().enumerate() {
+                if alive(t) {
+                    for &v in tri {
+                        if let Some(sp) =
+                            (v as usize).checked_sub(lo).and_then(|i| spans.get_mut(i))
+                        {
+                            sp[1] += 1;
+                        }
+                    }
                 }
             }
+        });
+        // starts
+        let mut total = 0u32;
+        for sp in span.iter_mut() {
+            sp[0] = total;
+            total += sp[1];
         }
-        for v in 0..nv {
-            offsets[v + 1] += offsets[v];
-        }
-        let total = offsets[nv] as usize;
         self.list.clear();
-        self.list.resize(total, 0);
-        // fill with a moving cursor per vertex (offsets[v] advances, then is
-        // restored by shifting)
-        let mut next: Vec<u32> = offsets[..nv].to_vec();
-        for (t, tri) in tris.iter().enumerate() {
-            if alive(t) {
-                for &v in tri {
-                    let slot = &mut next[v as usize];
-                    self.list[*slot as usize] = t as u32;
-                    *slot += 1;
+        self.list.resize(total as usize, 0);
+        let span = &self.span;
+        let mut runs = Vec::with_capacity(threads);
+        let mut rest = &mut self.list[..];
+        for w in cuts.windows(2) {
+            let (lo, hi) = (w[0], w[1]);
+            let len: u32 = span[lo..hi].iter().map(|sp| sp[1]).sum();
+            let (head, tail) = rest.split_at_mut(len as usize);
+            runs.push((lo, hi, head));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each(|(lo, hi, dst)| {
+            // a moving cursor per vertex, relative to the run
+            let base = span.get(lo).map_or(0, |sp| sp[0]);
+            let mut next: Vec<u32> = span[lo..hi].iter().map(|sp| sp[0] - base).collect();
+            for (t, tri) in tris.iter().enumerate() {
+                if alive(t) {
+                    for &v in tri {
+                        if let Some(slot) =
+                            (v as usize).checked_sub(lo).and_then(|i| next.get_mut(i))
+                        {
+                            dst[*slot as usize] = t as u32;
+                            *slot += 1;
+                        }
+                    }
                 }
             }
-        }
-        self.over.clear();
-        self.over.resize(nv, CSR);
+        });
         self.arena.clear();
+        self.rewritten = 0;
     }
 
     /// Compact into the CSR from the live triangles.
     pub fn rebuild(&mut self, tris: &[[u32; 3]], alive: &[bool]) {
-        let nv = self.over.len();
+        let nv = self.span.len();
         self.build(nv, tris, |t| alive[t]);
+    }
+
+    /// The arena's weight against the CSR: its triangles plus a word per
+    /// list.
+    fn arena_weight(&self) -> usize {
+        self.arena.len() + self.rewritten
     }
 
     /// Whether the rewritten lists outweigh the CSR (time to `rebuild`).
     pub fn bloated(&self) -> bool {
-        self.arena.len() > self.list.len().max(1024)
+        self.arena_weight() > self.list.len().max(1024)
     }
 
     /// Whether the rewritten lists reach half the CSR: with the dead
     /// triangles the lists carry, worth a `rebuild` between passes.
     pub fn half_dead(&self) -> bool {
-        2 * self.arena.len() > self.list.len()
+        2 * self.arena_weight() > self.list.len()
     }
 
     /// Replace `v`'s list.
     pub fn set(&mut self, v: u32, tris: &[u32]) {
-        self.over[v as usize] = self.arena.len() as u32;
-        self.arena.push(tris.len() as u32);
+        self.span[v as usize] = [self.arena.len() as u32, tris.len() as u32 | ARENA];
         self.arena.extend_from_slice(tris);
+        self.rewritten += 1;
     }
 }
 

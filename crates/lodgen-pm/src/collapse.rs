@@ -8,7 +8,7 @@
 
 use crate::adjacency::{FanLookup, Fans};
 use crate::features::{AttributeCost, Features};
-use crate::heap::{bucket_sort_parts, f32_order_key, QuadHeap};
+use crate::heap::{f32_order_key, Buckets, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
@@ -245,8 +245,10 @@ struct Pass {
     number: u32,
     /// Whether `queue` is a started pass (false after a rebuild).
     open: bool,
-    /// The pass's candidates, sorted; `cursor` is the next one.
+    /// The pass's candidates, bucketed by cost and sorted as far as
+    /// `buckets` says; `cursor` is the next one.
     queue: Vec<PassEntry>,
+    buckets: Buckets,
     cursor: usize,
     /// Vertex → the last pass that moved or removed it.
     touched: Vec<u32>,
@@ -259,6 +261,19 @@ struct Pass {
     /// a sixth of its goal, as meshoptimizer does, so that a pass whose
     /// cheap pairs were all blocked still makes progress).
     cost_limit: f32,
+}
+
+/// A pass entry's bucket: the top 11 bits of its cost's order key.
+#[inline]
+fn pass_bucket(cost: f32) -> usize {
+    (f32_order_key(cost) >> 21) as usize
+}
+
+/// The order of a pass: by cost (`total_cmp`). Sorted stably from
+/// entries generated in (a, b) order, this is the total order (cost, a, b).
+#[inline]
+fn pass_order(x: &PassEntry, y: &PassEntry) -> Ordering {
+    f32_order_key(x.cost).cmp(&f32_order_key(y.cost))
 }
 
 #[inline]
@@ -300,13 +315,21 @@ impl Simplifier {
             Boundary::Weighted(w) => w,
             Boundary::Locked => 0.0,
         };
+        // Each face's plane once, not once per corner (the same sums, a
+        // third of the square roots and divisions).
+        let planes: Vec<Plane> = mesh
+            .triangles
+            .par_iter()
+            .map(|t| face_plane(&mesh.positions, t, opts.area_weighted))
+            .collect();
         let (quadric, (boundary, locked)): (Vec<Quadric>, (Vec<bool>, Vec<bool>)) = (0..nv as u32)
             .into_par_iter()
             .map(|v| {
-                let i = classify_vertex(&mesh, vtris.fan(v), v, opts, boundary_weight);
+                let i = classify_vertex(&mesh, &planes, vtris.fan(v), v, opts, boundary_weight);
                 (i.quadric, (i.boundary, i.locked))
             })
             .unzip();
+        drop(planes);
         let tau = opts.tau_for(mesh.diagonal());
         // Sorted edges (only the greedy heap and τ pairs need the list).
         let mut edges: Vec<(u32, u32)> = if opts.schedule == Schedule::Greedy || tau > 0.0 {
@@ -579,6 +602,7 @@ impl Simplifier {
         if self.opts.schedule != Schedule::Greedy {
             // the next step starts a fresh pass
             self.pass.queue.clear();
+            self.pass.buckets = Buckets::default();
             self.pass.cursor = 0;
             self.pass.open = false;
             return;
@@ -696,6 +720,10 @@ impl Simplifier {
                 }
                 continue;
             }
+            if pass.cursor >= pass.buckets.sorted_end() {
+                pass.buckets
+                    .sort_through(&mut pass.queue, pass.cursor, pass_order);
+            }
             let e = pass.queue[pass.cursor];
             if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
                 pass.cursor = pass.queue.len();
@@ -732,7 +760,8 @@ impl Simplifier {
     /// but the mesh (not on the thread count).
     fn start_pass(&mut self, factor: f32) {
         let t0 = Instant::now();
-        if self.pass.number == 0 || self.vtris.half_dead() {
+        // (the fans `new` builds are compact: the first pass needs no rebuild)
+        if self.vtris.half_dead() {
             self.vtris.rebuild(&self.tris, &self.tri_alive);
         }
         const CHUNK: usize = 2048;
@@ -768,6 +797,9 @@ impl Simplifier {
                             add(x);
                         }
                     }
+                    // in (a, b) order: the buckets keep it, and a stable
+                    // sort by cost then gives the total order
+                    nb.sort_unstable();
                     for &x in &nb {
                         if !(this.locked[vi] && this.locked[x as usize]) {
                             out.push(PassEntry {
@@ -782,26 +814,23 @@ impl Simplifier {
             })
             .collect();
         let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
-        bucket_sort_parts(
-            parts,
-            &mut queue,
-            |e| (f32_order_key(e.cost) >> 21) as usize,
-            |x, y| {
-                x.cost
-                    .total_cmp(&y.cost)
-                    .then(x.a.cmp(&y.a))
-                    .then(x.b.cmp(&y.b))
-            },
-        );
+        let mut buckets = Buckets::scatter(parts, &mut queue, |e| pass_bucket(e.cost));
         let goal = self.live_tris.saturating_sub(self.target);
         // most contractions remove two triangles
-        let limit = queue
-            .get(goal / 2)
-            .map_or(f32::INFINITY, |e| e.cost * factor);
+        let limit = if goal / 2 < queue.len() {
+            buckets.sort_through(&mut queue, goal / 2, pass_order);
+            queue[goal / 2].cost * factor
+        } else {
+            f32::INFINITY
+        };
+        // the pass (nearly always) stops at the limit: sort up to it now,
+        // in parallel, the rest only if the walk gets there
+        buckets.sort_through_bucket(&mut queue, pass_bucket(limit), pass_order);
         let pass = &mut self.pass;
         pass.number += 1;
         pass.open = true;
         pass.queue = queue;
+        pass.buckets = buckets;
         pass.cursor = 0;
         pass.goal = goal;
         pass.removed = 0;
@@ -843,11 +872,16 @@ impl Simplifier {
 
     /// Run until a stop; returns the reason.
     pub fn run(&mut self) -> StopReason {
-        loop {
-            if let Err(r) = self.step() {
-                return r;
+        // timed once, not per step (two clock reads per contraction were
+        // 2 % of a bunny run)
+        let t0 = Instant::now();
+        let r = loop {
+            if let Err(r) = self.step_inner() {
+                break r;
             }
-        }
+        };
+        self.stats.time.collapse += t0.elapsed();
+        r
     }
 
     fn next_generation(&mut self) -> u32 {
@@ -966,8 +1000,7 @@ impl Simplifier {
                 .copied()
                 .filter(|&t| self.tri_alive[t as usize]),
         );
-        for i in 0..self.vtris.fan(v0).len() {
-            let t = self.vtris.fan(v0)[i];
+        for &t in self.vtris.fan(v0) {
             if !self.tri_alive[t as usize] {
                 continue;
             }
@@ -1107,6 +1140,7 @@ struct VertexInfo {
 /// border edge, the constraint plane through it (GH97 §6.1).
 fn classify_vertex(
     mesh: &Mesh,
+    planes: &[Plane],
     ts: &[u32],
     v: u32,
     opts: &SimplifyOptions,
@@ -1120,13 +1154,9 @@ fn classify_vertex(
         let k = tri.iter().position(|&x| x == v).unwrap_or(0);
         uses.push((tri[(k + 1) % 3], 1, i as u32));
         uses.push((tri[(k + 2) % 3], 0, i as u32));
-        let [p0, p1, p2] = tri.map(|x| dv(mesh.positions[x as usize]));
-        let n = (p1 - p0).cross(p2 - p0);
-        let len = n.length();
-        if len > 0.0 {
-            let unit = n / len;
-            let w = if opts.area_weighted { 0.5 * len } else { 1.0 };
-            quadric += Quadric::from_plane(unit, -unit.dot(p0), w);
+        let [nx, ny, nz, d, w] = planes[t as usize];
+        if w > 0.0 {
+            quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
         }
     }
     uses.sort_unstable();
@@ -1186,6 +1216,24 @@ fn classify_vertex(
         quadric,
         boundary,
         locked,
+    }
+}
+
+/// A face's plane `[n.x, n.y, n.z, d, weight]` (unit normal, `n·x + d =
+/// 0`), weight 0 when the face has no area.
+type Plane = [f64; 5];
+
+/// The plane of triangle `t`, weighted by its area or 1.
+fn face_plane(positions: &[[f32; 3]], t: &[u32; 3], area_weighted: bool) -> Plane {
+    let [p0, p1, p2] = t.map(|x| dv(positions[x as usize]));
+    let n = (p1 - p0).cross(p2 - p0);
+    let len = n.length();
+    if len > 0.0 {
+        let unit = n / len;
+        let w = if area_weighted { 0.5 * len } else { 1.0 };
+        [unit.x, unit.y, unit.z, -unit.dot(p0), w]
+    } else {
+        [0.0; 5]
     }
 }
 

@@ -7,10 +7,11 @@
 //! entries, the children of a node share one 64-byte cache line and the tree
 //! is half as deep.
 //!
-//! Also [`bucket_sort_parts`], which orders each contraction pass: a
-//! counting pass on the top bits of the cost, then a sort per bucket (one
-//! comparison sort of all the pass's pairs was a quarter of all
-//! instructions on the bunny; an LSD radix sort needed a second buffer).
+//! Also [`Buckets`], which orders each contraction pass: a counting pass on
+//! the top bits of the cost, then a sort per bucket, done only for the
+//! buckets the pass reaches (one comparison sort of all the pass's pairs
+//! was a quarter of all instructions on the bunny; an LSD radix sort
+//! needed a second buffer).
 //!
 //! Owns only the ordering containers; what an entry means is `collapse`'s.
 
@@ -129,56 +130,156 @@ pub fn f32_order_key(x: f32) -> u32 {
     }
 }
 
-/// Sort the concatenation of `parts` into `out` by `order`, a total order
-/// whose coarse part is `bucket(item) < 2048` (items in a lower bucket
-/// come first): one counting pass moves the items out of the parts (which
-/// are freed as it goes) into their buckets, then each bucket is sorted in
-/// place, in parallel. Needs no second buffer, unlike an LSD radix sort
-/// (peak memory: the first contraction pass's list is the largest
-/// allocation of a run).
-pub fn bucket_sort_parts<T: Copy + Send>(
-    parts: Vec<Vec<T>>,
-    out: &mut Vec<T>,
-    bucket: impl Fn(&T) -> usize,
-    order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
-) {
-    use rayon::prelude::*;
-    const BUCKETS: usize = 2048;
-    let n: usize = parts.iter().map(Vec::len).sum();
-    out.clear();
-    let Some(&first) = parts.iter().find_map(|p| p.first()) else {
-        return;
-    };
-    let mut counts = vec![0usize; BUCKETS];
-    for it in parts.iter().flatten() {
-        counts[bucket(it)] += 1;
-    }
-    let mut next = Vec::with_capacity(BUCKETS);
-    let mut sum = 0;
-    for &c in &counts {
-        next.push(sum);
-        sum += c;
-    }
-    out.resize(n, first);
-    for part in parts {
-        for it in &part {
-            let b = bucket(it);
-            out[next[b]] = *it;
-            next[b] += 1;
+/// Items moved into cost buckets (a counting pass on a coarse key), each
+/// bucket sorted only when it is needed: a contraction pass reads its list
+/// cheapest first and stops at a cost limit, so about half of the list is
+/// never read, and never sorted.
+#[derive(Clone, Debug, Default)]
+pub struct Buckets {
+    /// `ends[k]`: one past the last item of bucket `k`.
+    ends: Vec<usize>,
+    /// Buckets `0..sorted` are sorted.
+    sorted: usize,
+}
+
+impl Buckets {
+    /// The number of buckets: `bucket(item)` must be below this.
+    pub const COUNT: usize = 2048;
+
+    /// Move the concatenation of `parts` into `out`, grouped by
+    /// `bucket(item)` (items of a lower bucket first; within a bucket in
+    /// the parts' order). In parallel: the buckets are split into one
+    /// contiguous run per thread, each thread reads every part and writes
+    /// its run's items (the result does not depend on the split). No second
+    /// buffer besides `out` is needed (unlike an LSD radix sort; peak
+    /// memory: the first contraction pass's list is the largest
+    /// allocation of a run).
+    pub fn scatter<T: Copy + Send + Sync>(
+        parts: Vec<Vec<T>>,
+        out: &mut Vec<T>,
+        bucket: impl Fn(&T) -> usize + Sync,
+    ) -> Buckets {
+        use rayon::prelude::*;
+        let n: usize = parts.iter().map(Vec::len).sum();
+        out.clear();
+        let Some(&first) = parts.iter().find_map(|p| p.first()) else {
+            return Buckets::default();
+        };
+        let counts = parts
+            .par_iter()
+            .fold(
+                || vec![0usize; Self::COUNT],
+                |mut c, part| {
+                    for it in part {
+                        c[bucket(it)] += 1;
+                    }
+                    c
+                },
+            )
+            .reduce(
+                || vec![0usize; Self::COUNT],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x += y;
+                    }
+                    a
+                },
+            );
+        let mut starts = Vec::with_capacity(Self::COUNT + 1);
+        let mut sum = 0;
+        for &c in &counts {
+            starts.push(sum);
+            sum += c;
+        }
+        starts.push(sum);
+        out.resize(n, first);
+        // bucket runs of about equal item counts, one per thread
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let mut cuts = vec![0usize];
+        for k in 1..threads {
+            let target = n * k / threads;
+            let b = starts.partition_point(|&x| x < target).min(Self::COUNT);
+            if b > *cuts.last().unwrap_or(&0) {
+                cuts.push(b);
+            }
+        }
+        cuts.push(Self::COUNT);
+        let mut runs: Vec<(usize, usize, &mut [T])> = Vec::with_capacity(cuts.len());
+        let mut rest = &mut out[..];
+        for w in cuts.windows(2) {
+            let (head, tail) = rest.split_at_mut(starts[w[1]] - starts[w[0]]);
+            runs.push((w[0], w[1], head));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each(|(lo, hi, dst)| {
+            let base = starts[lo];
+            let mut next: Vec<usize> = starts[lo..hi].iter().map(|&x| x - base).collect();
+            for it in parts.iter().flatten() {
+                let b = bucket(it);
+                if (lo..hi).contains(&b) {
+                    let slot = &mut next[b - lo];
+                    dst[*slot] = *it;
+                    *slot += 1;
+                }
+            }
+        });
+        drop(parts);
+        starts.remove(0);
+        Buckets {
+            ends: starts,
+            sorted: 0,
         }
     }
-    let mut slices: Vec<&mut [T]> = Vec::with_capacity(BUCKETS);
-    let mut rest = &mut out[..];
-    for &c in &counts {
-        let (head, tail) = rest.split_at_mut(c);
-        if c > 1 {
-            slices.push(head);
-        }
-        rest = tail;
+
+    /// One past the last item of the sorted prefix.
+    pub fn sorted_end(&self) -> usize {
+        self.sorted.checked_sub(1).map_or(0, |k| self.ends[k])
     }
-    slices
-        .into_par_iter()
-        .for_each(|s| s.sort_unstable_by(&order));
+
+    /// Sort (stably, by `order`) every bucket up to the one holding item
+    /// `i` (all of them when `i` is past the end), in parallel.
+    pub fn sort_through<T: Send>(
+        &mut self,
+        items: &mut [T],
+        i: usize,
+        order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
+    ) {
+        let k = self.ends.partition_point(|&e| e <= i);
+        self.sort_through_bucket(items, k, order);
+    }
+
+    /// Sort (stably, by `order`) buckets `0..=k` (all when `k` is past the
+    /// last), in parallel.
+    pub fn sort_through_bucket<T: Send>(
+        &mut self,
+        items: &mut [T],
+        k: usize,
+        order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
+    ) {
+        use rayon::prelude::*;
+        let upto = k.saturating_add(1).min(self.ends.len());
+        if upto <= self.sorted {
+            return;
+        }
+        let start = self.sorted_end();
+        let mut slices: Vec<&mut [T]> = Vec::with_capacity(upto - self.sorted);
+        let mut rest = &mut items[start..];
+        let mut at = start;
+        for &e in &self.ends[self.sorted..upto] {
+            let (head, tail) = rest.split_at_mut(e - at);
+            if head.len() > 1 {
+                slices.push(head);
+            }
+            rest = tail;
+            at = e;
+        }
+        if slices.len() == 1 {
+            slices[0].sort_by(&order);
+        } else {
+            slices.into_par_iter().for_each(|s| s.sort_by(&order));
+        }
+        self.sorted = upto;
+    }
 }
 
 #[cfg(test)]
@@ -204,7 +305,7 @@ mod tests {
         }
 
         #[test]
-        fn bucket_sort_sorts(v in prop::collection::vec((any::<f32>(), any::<u16>()), 0..3000), split in 0usize..3000) {
+        fn buckets_sort(v in prop::collection::vec((any::<f32>(), any::<u16>()), 0..3000), split in 0usize..3000) {
             let order = |x: &(f32, u16), y: &(f32, u16)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
             let key = |x: &(f32, u16)| {
                 let b = x.0.to_bits();
@@ -213,11 +314,20 @@ mod tests {
             };
             let mut expected = v.clone();
             expected.sort_by(order);
+            let bits = |w: &[(f32, u16)]| w.iter().map(|x| (x.0.to_bits(), x.1)).collect::<Vec<_>>();
             let cut = split.min(v.len());
             let parts = vec![v[..cut].to_vec(), v[cut..].to_vec()];
             let mut got = Vec::new();
-            bucket_sort_parts(parts, &mut got, key, order);
-            let bits = |w: &[(f32, u16)]| w.iter().map(|x| (x.0.to_bits(), x.1)).collect::<Vec<_>>();
+            let mut b = Buckets::scatter(parts, &mut got, key);
+            // a prefix first, then the rest
+            let mid = got.len() / 3;
+            b.sort_through(&mut got, mid, order);
+            prop_assert!(b.sorted_end() > mid || got.is_empty());
+            let mut sorted = got[..b.sorted_end()].to_vec();
+            sorted.sort_by(order);
+            prop_assert_eq!(bits(&got[..b.sorted_end()]), bits(&sorted));
+            b.sort_through(&mut got, usize::MAX, order);
+            prop_assert_eq!(b.sorted_end(), got.len());
             prop_assert_eq!(bits(&got), bits(&expected));
         }
     }

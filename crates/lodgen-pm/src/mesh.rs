@@ -213,7 +213,6 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         return Err(MeshError::IndexCount(indices.len()));
     }
     // read in place, not copied (peak memory)
-    let tri_at = |t: usize| [indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]];
     let input_count = indices.len() / 3;
     let input_triangles = || indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
     validate_parts(positions, input_triangles())?;
@@ -237,26 +236,49 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     let mut welded_positions = Vec::new();
     let mut triangles = Vec::with_capacity(input_count);
     let mut triangle_map = Vec::with_capacity(input_count);
-    // Duplicates: keep the first triangle on each vertex set.
-    let tri_key = |ti: u32| {
-        let mut k = tri_at(ti as usize).map(|i| canonical[i as usize]);
+    // Duplicates: keep the first triangle on each vertex set. Triangles
+    // are grouped by their lowest corner (a counting sort; a group is one
+    // vertex's fan, so the memory traffic stays local, unlike probing a
+    // hash table of all triangles), and each group is sorted by the other
+    // two corners, then input order.
+    let sorted_key = |t: [u32; 3]| {
+        let mut k = t.map(|i| canonical[i as usize]);
         k.sort_unstable();
-        k
+        (k[0] != k[1] && k[1] != k[2]).then_some(k)
     };
-    let mut table = FirstOf::new(input_count);
-    let mut keep = vec![false; input_count];
-    for (ti, t) in input_triangles().enumerate() {
-        let c = t.map(|i| canonical[i as usize]);
-        if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
-            stats.degenerate_triangles += 1;
-            continue;
-        }
-        if table.first(ti as u32, tri_key) == ti as u32 {
-            keep[ti] = true;
-        } else {
-            stats.duplicate_triangles += 1;
+    let mut start = vec![0u32; positions.len() + 1];
+    for t in input_triangles() {
+        match sorted_key(t) {
+            Some(k) => start[k[0] as usize + 1] += 1,
+            None => stats.degenerate_triangles += 1,
         }
     }
+    for v in 0..positions.len() {
+        start[v + 1] += start[v];
+    }
+    let mut group = vec![[0u32; 3]; start[positions.len()] as usize];
+    let mut next = start.clone();
+    for (ti, t) in input_triangles().enumerate() {
+        if let Some(k) = sorted_key(t) {
+            let slot = &mut next[k[0] as usize];
+            group[*slot as usize] = [k[1], k[2], ti as u32];
+            *slot += 1;
+        }
+    }
+    drop(next);
+    let mut keep = vec![false; input_count];
+    for w in start.windows(2) {
+        let g = &mut group[w[0] as usize..w[1] as usize];
+        g.sort_unstable();
+        for (i, e) in g.iter().enumerate() {
+            if i == 0 || g[i - 1][..2] != e[..2] {
+                keep[e[2] as usize] = true;
+            } else {
+                stats.duplicate_triangles += 1;
+            }
+        }
+    }
+    drop((group, start));
     for (ti, t) in input_triangles().enumerate() {
         if !keep[ti] {
             continue;
