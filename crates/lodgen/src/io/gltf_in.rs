@@ -35,7 +35,7 @@ const MAX_ELEMENTS: usize = 1 << 24;
 
 /// Required extensions this reader supports although the `gltf` crate's
 /// validation does not: quantized attributes are plain integer accessors.
-const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization"];
+const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization", super::meshopt_in::EXTENSION];
 
 /// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
 /// resolved against the directory of `path`.
@@ -80,7 +80,31 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
     })?;
     let mut root = document.into_json();
     root.extensions_required = required;
-    let buffers = r.load_buffers(&root, blob)?;
+    // EXT_meshopt_compression: decode compressed views up front (the
+    // extension's data is not in the typed document, so read the raw JSON)
+    let compressed = root
+        .extensions_used
+        .iter()
+        .any(|e| e == super::meshopt_in::EXTENSION);
+    let raw: Option<serde_json::Value> = if compressed {
+        Some(serde_json::from_slice(json).map_err(|e| {
+            r.err(
+                Location::File,
+                ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
+            )
+        })?)
+    } else {
+        None
+    };
+    let fallback = raw
+        .as_ref()
+        .map(super::meshopt_in::fallback_buffers)
+        .unwrap_or_default();
+    let mut buffers = r.load_buffers(&root, blob, &fallback)?;
+    if let Some(raw) = &raw {
+        super::meshopt_in::decompress(raw, &mut root, &mut buffers)
+            .map_err(|(at, message)| r.json_err(&at, message))?;
+    }
 
     let materials = root
         .materials
@@ -192,10 +216,20 @@ impl Reader<'_> {
         Ok((json, bin))
     }
 
-    /// Loads every buffer: the GLB BIN chunk, `data:` URIs, relative files.
-    fn load_buffers(&self, root: &Root, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, ReadError> {
+    /// Loads every buffer: the GLB BIN chunk, `data:` URIs, relative files;
+    /// `fallback` buffers (`EXT_meshopt_compression`) are never read: empty.
+    fn load_buffers(
+        &self,
+        root: &Root,
+        blob: Option<&[u8]>,
+        fallback: &[usize],
+    ) -> Result<Vec<Vec<u8>>, ReadError> {
         let mut out = Vec::with_capacity(root.buffers.len());
         for (i, buffer) in root.buffers.iter().enumerate() {
+            if fallback.contains(&i) && !(buffer.uri.is_none() && i == 0 && blob.is_some()) {
+                out.push(Vec::new());
+                continue;
+            }
             let at = format!("buffers[{i}]");
             let data = match &buffer.uri {
                 None => match blob {

@@ -20,6 +20,7 @@
 //! (case-insensitive `.obj`, `.ply`, `.smf`, `.gltf`, `.glb`).
 
 mod gltf_in;
+mod meshopt_in;
 mod obj;
 mod ply;
 mod smf;
