@@ -437,7 +437,9 @@ fn write_and_read(dir: &std::path::Path, file: &str, opts: WriteOptions) -> Scen
 
 /// Each mesh's positions, UVs and triangles (corners rotated to start at
 /// the lowest index: the triangle codec may rotate them).
-fn content(s: &Scene) -> Vec<(Vec<[f32; 3]>, Option<Vec<[f32; 2]>>, Vec<[u32; 3]>)> {
+type Content = (Vec<[f32; 3]>, Option<Vec<[f32; 2]>>, Vec<[u32; 3]>);
+
+fn content(s: &Scene) -> Vec<Content> {
     s.meshes
         .iter()
         .flat_map(|m| &m.primitives)
