@@ -532,3 +532,87 @@ fn corrupt_meshopt_data_is_an_error_naming_the_view() {
         "garbage in every compressed view decoded silently"
     );
 }
+
+/// A hand-made file as gltfpack writes them: normals as octahedral-filtered
+/// `i8` (EXT_meshopt_compression filter OCTAHEDRAL), positions as
+/// exponential-filtered floats, both compressed; read back within the
+/// filters' precision.
+#[test]
+fn filtered_meshopt_attributes_decode() {
+    use meshopt::encoding::{
+        encode_filter_exp, encode_filter_oct, encode_vertex_buffer, EncodeExpMode,
+    };
+    let dir = scratch("m-filters");
+    let positions = [
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+    ];
+    let normals = [
+        [0.0f32, 0.0, 1.0, 0.0],
+        [0.6, 0.0, 0.8, 0.0],
+        [0.0, -0.6, 0.8, 0.0],
+        [0.48, 0.6, 0.64, 0.0],
+    ];
+    let oct: Vec<[i8; 4]> = encode_filter_oct(&normals, 8);
+    let exp: Vec<[u32; 3]> = encode_filter_exp::<3>(&positions, 15, EncodeExpMode::Separate);
+    let n_enc = encode_vertex_buffer(&oct).unwrap();
+    let p_enc = encode_vertex_buffer(&exp).unwrap();
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bin: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+    let p_at = bin.len();
+    bin.extend_from_slice(&p_enc);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let n_at = bin.len();
+    bin.extend_from_slice(&n_enc);
+    std::fs::write(dir.join("f.bin"), &bin).unwrap();
+    let ext = |at: usize, len: usize, stride: usize, filter: &str| {
+        serde_json::json!({"EXT_meshopt_compression": {
+            "buffer": 0, "byteOffset": at, "byteLength": len, "byteStride": stride,
+            "count": 4, "mode": "ATTRIBUTES", "filter": filter}})
+    };
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["EXT_meshopt_compression"],
+        "extensionsRequired": ["EXT_meshopt_compression"],
+        "buffers": [
+            {"uri": "f.bin", "byteLength": bin.len()},
+            {"byteLength": 64, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 12},
+            {"buffer": 1, "byteOffset": 0, "byteLength": 48, "byteStride": 12,
+             "extensions": ext(p_at, p_enc.len(), 12, "EXPONENTIAL")},
+            {"buffer": 1, "byteOffset": 48, "byteLength": 16, "byteStride": 4,
+             "extensions": ext(n_at, n_enc.len(), 4, "OCTAHEDRAL")}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5123, "count": 6, "type": "SCALAR"},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0.5]},
+            {"bufferView": 2, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 1, "NORMAL": 2}, "indices": 0}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0
+    });
+    let path = dir.join("f.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = lodgen::io::read_scene(&path).unwrap();
+    let p = &scene.meshes[0].primitives[0];
+    assert_eq!(p.indices, [0, 1, 2, 2, 1, 3]);
+    for (got, want) in p.positions.iter().zip(&positions) {
+        for a in 0..3 {
+            assert!((got[a] - want[a]).abs() < 1e-4, "{got:?} vs {want:?}");
+        }
+    }
+    for (got, want) in p.normals.as_ref().unwrap().iter().zip(&normals) {
+        for a in 0..3 {
+            assert!((got[a] - want[a]).abs() < 0.03, "{got:?} vs {want:?}");
+        }
+    }
+}
