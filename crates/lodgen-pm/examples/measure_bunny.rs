@@ -7,6 +7,11 @@ use std::time::Instant;
 
 use lodgen_pm::bvh::TriangleBvh;
 use lodgen_pm::measure::{measure, one_sided, MeasureOptions, MeshRef};
+use lodgen_pm::Mesh;
+
+#[path = "common/mod.rs"]
+mod common;
+use common::load_obj;
 
 /// CPU time of the calling thread in ms (Linux), so figures survive a loaded machine.
 fn thread_cpu_ms() -> f64 {
@@ -14,30 +19,6 @@ fn thread_cpu_ms() -> f64 {
         .ok()
         .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
         .map_or(f64::NAN, |ns| ns * 1e-6)
-}
-
-fn load_obj(path: &str) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let (mut v, mut f) = (Vec::new(), Vec::new());
-    for line in text.lines() {
-        let mut w = line.split_whitespace();
-        match w.next() {
-            Some("v") => {
-                let c: Vec<f32> = w.take(3).map(|s| s.parse().unwrap()).collect();
-                v.push([c[0], c[1], c[2]]);
-            }
-            Some("f") => {
-                let c: Vec<u32> = w
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..c.len() - 1 {
-                    f.push([c[0], c[k], c[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    (v, f)
 }
 
 /// Vertex clustering on a grid of `cells` cells along the longest side: every vertex moves to
@@ -92,7 +73,10 @@ fn main() {
         .cloned()
         .unwrap_or_else(|| "/work/shared/assets/bunny.obj".into());
     let runs: usize = args.get(2).map_or(10, |s| s.parse().unwrap());
-    let (v, f) = load_obj(&path);
+    let Mesh {
+        positions: v,
+        triangles: f,
+    } = load_obj(&path);
     let cells: f32 = args.get(3).map_or(15.0, |s| s.parse().unwrap());
     let (cv, cf) = cluster(&v, &f, cells);
     let a = MeshRef::new(&v, &f);

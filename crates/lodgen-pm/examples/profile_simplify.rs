@@ -10,34 +10,11 @@ use std::time::Instant;
 
 use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
 use lodgen_pm::shapes::subdivide;
-use lodgen_pm::{prepare, Mesh, Schedule, Simplifier, SimplifyOptions};
+use lodgen_pm::{prepare, Schedule, Simplifier, SimplifyOptions};
 
-fn load_obj(path: &str) -> Mesh {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-    for line in text.lines() {
-        let mut w = line.split_whitespace();
-        match w.next() {
-            Some("v") => {
-                let c: Vec<f32> = w.take(3).map(|s| s.parse().unwrap()).collect();
-                positions.push([c[0], c[1], c[2]]);
-            }
-            Some("f") => {
-                let c: Vec<u32> = w
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..c.len() - 1 {
-                    triangles.push([c[0], c[k], c[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
-}
+#[path = "common/mod.rs"]
+mod common;
+use common::load_obj;
 
 /// Peak resident memory (kB) since the last `reset_peak`.
 fn peak_kb() -> u64 {

@@ -1,0 +1,32 @@
+//! What the examples share: a minimal OBJ reader (`v` and `f` lines only,
+//! polygons fanned), enough for the shared test meshes. Examples panic on a
+//! bad file; the product's reader is `lodgen::io`.
+
+use lodgen_pm::Mesh;
+
+pub fn load_obj(path: &str) -> Mesh {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let c: Vec<f32> = w.take(3).map(|s| s.parse().unwrap()).collect();
+                positions.push([c[0], c[1], c[2]]);
+            }
+            Some("f") => {
+                let c: Vec<u32> = w
+                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                for k in 1..c.len() - 1 {
+                    triangles.push([c[0], c[k], c[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
