@@ -229,6 +229,17 @@ pub struct Simplifier {
     attributes: Option<AttributeCost>,
 }
 
+/// A contraction that passed [`Simplifier::check`]: `v0` goes into `v1`,
+/// which moves to `p`; `removed` are the triangles on both.
+#[derive(Debug)]
+struct Plan {
+    v0: u32,
+    v1: u32,
+    p: DVec3,
+    error: f32,
+    removed: SmallVec<[u32; 2]>,
+}
+
 /// A candidate of a pass: 12 bytes (the pass list and its sort buffer are
 /// the largest allocations of the first pass).
 #[derive(Clone, Copy, Debug, Default)]
@@ -844,6 +855,16 @@ impl Simplifier {
     /// Re-cost the pair `(a, b)` (exact: its vertices are current) and
     /// contract it if it is within `max_error` and legal.
     fn try_contract(&mut self, a: u32, b: u32) -> Result<(), Rejected> {
+        let plan = self.plan(a, b)?;
+        self.contract(plan);
+        Ok(())
+    }
+
+    /// The read-only half of [`Simplifier::try_contract`]: where the pair
+    /// `(a, b)` would go, which end is removed, and whether that is legal.
+    /// It reads nothing outside the closed one-rings of `a` and `b` (what
+    /// the batched walk's invalidation relies on, see `walk_batch`).
+    fn plan(&self, a: u32, b: u32) -> Result<Plan, Rejected> {
         let (ai, bi) = (a as usize, b as usize);
         let q = self.quadric[ai] + self.quadric[bi];
         let (p, cost) = self.target_with(&q, a, b);
@@ -865,9 +886,14 @@ impl Simplifier {
         } else {
             (a, b)
         };
-        let shared = self.check(v0, v1, p)?;
-        self.contract(v0, v1, p, error as f32, shared);
-        Ok(())
+        let removed = self.check(v0, v1, p)?;
+        Ok(Plan {
+            v0,
+            v1,
+            p,
+            error: error as f32,
+            removed,
+        })
     }
 
     /// Run until a stop; returns the reason.
@@ -875,13 +901,137 @@ impl Simplifier {
         // timed once, not per step (two clock reads per contraction were
         // 2 % of a bunny run)
         let t0 = Instant::now();
-        let r = loop {
-            if let Err(r) = self.step_inner() {
+        let batched = matches!(self.opts.schedule, Schedule::Passes { .. })
+            && self.features.is_none()
+            && rayon::current_num_threads() > 1;
+        let mut walk = || loop {
+            let step = match self.opts.schedule {
+                Schedule::Passes { factor } if batched => self.walk_batch(factor),
+                _ => self.step_inner(),
+            };
+            if let Err(r) = step {
                 break r;
             }
         };
+        // batched, the walk runs on a pool thread: its batches then fork
+        // to a sibling that is often still awake, instead of waking two
+        let r = if batched {
+            rayon::scope(|_| walk())
+        } else {
+            walk()
+        };
         self.stats.time.collapse += t0.elapsed();
         r
+    }
+
+    /// The pass walk of [`Simplifier::step_pass`], a batch at a time, with
+    /// the same result contraction for contraction: the next `BATCH`
+    /// candidates are planned ([`Simplifier::plan`]: costing, placement and
+    /// legality, most of a step's work) in parallel on the mesh as it is,
+    /// then walked in order exactly as `step_pass` would, contracting from
+    /// the plans. A contraction changes nothing outside the closed
+    /// one-rings of its two vertices, and a plan reads nothing outside the
+    /// closed one-rings of its pair; so each contraction marks its new
+    /// one-ring (and the deleted triangles' corners), and a pair with a
+    /// marked vertex is planned again, serially, when its turn comes.
+    /// Pass boundaries and candidates beyond the sorted part go through
+    /// `step_pass` itself.
+    fn walk_batch(&mut self, factor: f32) -> Result<(), StopReason> {
+        /// At most this many pairs are planned at once (the batch is one
+        /// pair per 64 live triangles: enough to amortise the fork, few
+        /// enough that a plan is rarely invalidated).
+        const MAX_BATCH: usize = 1024;
+        if self.live_tris <= self.target {
+            return Err(StopReason::Target);
+        }
+        let pass = &self.pass;
+        let end = pass.queue.len().min(pass.buckets.sorted_end());
+        if !pass.open || pass.cursor >= end {
+            return self.step_pass(factor);
+        }
+        // about one planned pair per 64 live triangles: a contraction
+        // marks ~10 vertices, so a pair's plan stays valid ~90 % of the time
+        let want = (self.live_tris / 64).clamp(16, MAX_BATCH);
+        let n = pass.number;
+        let mut batch = std::mem::take(&mut self.scratch);
+        batch.clear();
+        let mut scan = pass.cursor;
+        while scan < end && batch.len() < want {
+            let e = pass.queue[scan];
+            if pass.touched[e.a as usize] != n && pass.touched[e.b as usize] != n {
+                batch.push(scan as u32);
+            }
+            scan += 1;
+        }
+        let this = &*self;
+        let mut plans: Vec<Option<Result<Plan, Rejected>>> = batch
+            .par_iter()
+            .with_min_len(8)
+            .map(|&i| {
+                let e = this.pass.queue[i as usize];
+                Some(this.plan(e.a, e.b))
+            })
+            .collect();
+        let g = self.next_generation();
+        for (k, &i) in batch.iter().enumerate() {
+            // what `step_inner` and `step_pass` check before a candidate
+            if self.live_tris <= self.target {
+                self.pass.cursor = i as usize;
+                self.scratch = batch;
+                return Err(StopReason::Target);
+            }
+            let pass = &mut self.pass;
+            let e = pass.queue[i as usize];
+            if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
+                pass.cursor = pass.queue.len();
+                self.scratch = batch;
+                return Ok(());
+            }
+            pass.cursor = i as usize + 1;
+            if pass.touched[e.a as usize] == n || pass.touched[e.b as usize] == n {
+                continue;
+            }
+            let plan = if self.mark[e.a as usize] == g || self.mark[e.b as usize] == g {
+                self.plan(e.a, e.b)
+            } else {
+                plans[k].take().expect("each plan is used once")
+            };
+            match plan {
+                Ok(plan) => {
+                    let before = self.live_tris;
+                    let (v1, removed) = (plan.v1, plan.removed.clone());
+                    self.contract(plan);
+                    self.mark_changed(v1, &removed, g);
+                    let pass = &mut self.pass;
+                    pass.touched[e.a as usize] = n;
+                    pass.touched[e.b as usize] = n;
+                    pass.removed += before - self.live_tris;
+                    pass.collapses += 1;
+                }
+                Err(r) => {
+                    if r == Rejected::Error {
+                        self.pass.error_rejections += 1;
+                    }
+                    self.stats.rejected.count(r);
+                }
+            }
+        }
+        // the rest of the scanned range was touched: skipped, as step_pass would
+        self.pass.cursor = self.pass.cursor.max(scan);
+        self.scratch = batch;
+        Ok(())
+    }
+
+    /// Mark with `g` every vertex whose plan a contraction into `v1` may
+    /// have changed: `v1`'s new one-ring (which holds the removed vertex's
+    /// old one) and the corners of the deleted triangles.
+    fn mark_changed(&mut self, v1: u32, removed: &[u32], g: u32) {
+        self.mark[v1 as usize] = g;
+        for &t in self.vtris.fan(v1).iter().chain(removed) {
+            for &x in &self.tris[t as usize] {
+                self.mark[x as usize] = g;
+            }
+        }
     }
 
     fn next_generation(&mut self) -> u32 {
@@ -895,7 +1045,7 @@ impl Simplifier {
 
     /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
     /// On success returns the triangles the contraction deletes.
-    fn check(&mut self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
+    fn check(&self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
         let (i0, i1) = (v0 as usize, v1 as usize);
         if self.locked[i0] && self.locked[i1] {
             return Err(Rejected::Locked);
@@ -903,47 +1053,49 @@ impl Simplifier {
         if let Some(f) = &self.features {
             f.allows(v0, v1)?;
         }
-        // Triangles on both vertices (deleted) and the one-ring of v0.
-        let g = self.next_generation();
+        // Triangles on both vertices (deleted), and the link condition:
+        // the only common neighbours are the opposite ones.
         let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
         let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
-        for &t in self.vtris.fan(v0) {
-            if !self.tri_alive[t as usize] {
-                continue;
-            }
-            let tri = self.tris[t as usize];
-            if tri.contains(&v1) {
-                shared.push(t);
-                if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
-                    opposite.push(o);
+        let common = with_marks(self.pos.len(), |mark, g| {
+            // the one-ring of v0 gets g, its vertices also on v1's get g + 1
+            for &t in self.vtris.fan(v0) {
+                if !self.tri_alive[t as usize] {
+                    continue;
+                }
+                let tri = self.tris[t as usize];
+                if tri.contains(&v1) {
+                    shared.push(t);
+                    if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
+                        opposite.push(o);
+                    }
+                }
+                for &x in &tri {
+                    mark[x as usize] = g;
                 }
             }
-            for &x in &tri {
-                if x != v0 {
-                    self.mark[x as usize] = g;
+            if shared.len() > 2 || (shared.len() == 2 && self.boundary[i0] && self.boundary[i1]) {
+                return 0;
+            }
+            let mut common = 0;
+            for &t in self.vtris.fan(v1) {
+                if !self.tri_alive[t as usize] {
+                    continue;
+                }
+                for &x in &self.tris[t as usize] {
+                    if x != v1 && x != v0 && mark[x as usize] == g {
+                        mark[x as usize] = g + 1; // count each once
+                        common += 1;
+                    }
                 }
             }
-        }
+            common
+        });
         if shared.len() == 2 && self.boundary[i0] && self.boundary[i1] {
             return Err(Rejected::BoundaryPinch);
         }
         if shared.len() > 2 {
             return Err(Rejected::Link);
-        }
-        // Link condition: the only common neighbours are the opposite ones.
-        let g2 = self.next_generation();
-        debug_assert_ne!(g, g2);
-        let mut common = 0;
-        for &t in self.vtris.fan(v1) {
-            if !self.tri_alive[t as usize] {
-                continue;
-            }
-            for &x in &self.tris[t as usize] {
-                if x != v1 && x != v0 && self.mark[x as usize] == g {
-                    self.mark[x as usize] = g2; // count each once
-                    common += 1;
-                }
-            }
         }
         if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
             return Err(Rejected::Link);
@@ -964,7 +1116,14 @@ impl Simplifier {
     }
 
     /// Contract `v0` into `v1` at `p`, record it, and re-queue `v1`'s pairs.
-    fn contract(&mut self, v0: u32, v1: u32, p: DVec3, error: f32, removed: SmallVec<[u32; 2]>) {
+    fn contract(&mut self, plan: Plan) {
+        let Plan {
+            v0,
+            v1,
+            p,
+            error,
+            removed,
+        } = plan;
         let (i0, i1) = (v0 as usize, v1 as usize);
         let merged = fv(p);
         let edits = self.features.as_ref().map(|f| {
@@ -1310,6 +1469,31 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
         }
     }
     Ok(())
+}
+
+thread_local! {
+    /// Per-thread vertex marks for [`Simplifier::check`] (which reads
+    /// only, so that the batched walk can run it on several threads):
+    /// marks and the last generation handed out.
+    static MARKS: std::cell::RefCell<(Vec<u32>, u32)> = const { std::cell::RefCell::new((Vec::new(), 0)) };
+}
+
+/// Run `f` with this thread's marks (at least `n` of them) and two fresh
+/// generations `g` and `g + 1` no mark holds yet.
+fn with_marks<R>(n: usize, f: impl FnOnce(&mut [u32], u32) -> R) -> R {
+    MARKS.with(|m| {
+        let (mark, last) = &mut *m.borrow_mut();
+        if mark.len() < n {
+            mark.resize(n, 0);
+        }
+        if *last >= u32::MAX - 2 {
+            mark.fill(0);
+            *last = 0;
+        }
+        let g = *last + 1;
+        *last += 2;
+        f(mark, g)
+    })
 }
 
 /// Edge-connected fans of triangles around `v` (1 for a manifold vertex).

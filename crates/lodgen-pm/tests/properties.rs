@@ -130,6 +130,27 @@ fn schedule(greedy: bool) -> Schedule {
     }
 }
 
+/// The progressive mesh and the contraction count of `Simplifier::run`
+/// (on a four-thread pool, so that it takes its batched walk, whatever
+/// this machine has) and of a `step` loop (one candidate at a time).
+type Outcome = (ProgressiveMesh, usize, usize);
+fn run_and_step(m: &Mesh, opts: &SimplifyOptions) -> (Outcome, Outcome) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .unwrap();
+    let ran = pool.install(|| {
+        let mut s = Simplifier::new(m, opts).unwrap();
+        s.run();
+        let (pm, st) = s.finish();
+        (pm, st.collapses, st.rejected.total())
+    });
+    let mut s = Simplifier::new(m, opts).unwrap();
+    while s.step().is_ok() {}
+    let (pm, st) = s.finish();
+    (ran, (pm, st.collapses, st.rejected.total()))
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
@@ -171,6 +192,14 @@ proptest! {
     }
 
     #[test]
+    fn run_equals_stepping(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.5, tau in 0.0f64..0.2) {
+        let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio).with_tau(Tau::Absolute(tau));
+        let (a, b) = run_and_step(&m, &opts);
+        prop_assert_eq!(a, b);
+    }
+
+    #[test]
     fn grid_pair_finder_equals_brute_force(
         pts in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 2..120),
         tau in 0.0f64..0.6,
@@ -178,6 +207,20 @@ proptest! {
         let tris: Vec<[u32; 3]> = (0..pts.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
         let e = edges(&tris);
         prop_assert_eq!(near_pairs(&pts, &e, tau), near_pairs_brute_force(&pts, &e, tau));
+    }
+}
+
+#[test]
+fn the_batched_walk_contracts_exactly_what_stepping_does_on_the_cow() {
+    let Some(text) = common::shared_asset_text("cow.obj") else {
+        return;
+    };
+    let (p, idx) = common::read_obj(&text);
+    let m = prepare(&p, &idx).unwrap().mesh;
+    for ratio in [0.5, 0.02] {
+        let (ran, stepped) = run_and_step(&m, &SimplifyOptions::DEFAULT.with_target_ratio(ratio));
+        assert!(ran.1 > 1000, "{} contractions", ran.1);
+        assert_eq!(ran, stepped, "ratio {ratio}");
     }
 }
 
