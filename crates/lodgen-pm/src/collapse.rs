@@ -902,7 +902,6 @@ impl Simplifier {
         // 2 % of a bunny run)
         let t0 = Instant::now();
         let batched = matches!(self.opts.schedule, Schedule::Passes { .. })
-            && self.features.is_none()
             && rayon::current_num_threads() > 1;
         let mut walk = || loop {
             let step = match self.opts.schedule {
@@ -1024,11 +1023,17 @@ impl Simplifier {
 
     /// Mark with `g` every vertex whose plan a contraction into `v1` may
     /// have changed: `v1`'s new one-ring (which holds the removed vertex's
-    /// old one) and the corners of the deleted triangles.
+    /// old one), the corners of the deleted triangles, and `v1`'s feature
+    /// neighbours (whose feature kind `Features::contract` recounted).
     fn mark_changed(&mut self, v1: u32, removed: &[u32], g: u32) {
         self.mark[v1 as usize] = g;
         for &t in self.vtris.fan(v1).iter().chain(removed) {
             for &x in &self.tris[t as usize] {
+                self.mark[x as usize] = g;
+            }
+        }
+        if let Some(f) = &self.features {
+            for &x in &f.nbrs[v1 as usize] {
                 self.mark[x as usize] = g;
             }
         }

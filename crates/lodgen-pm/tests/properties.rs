@@ -133,19 +133,31 @@ fn schedule(greedy: bool) -> Schedule {
 /// The progressive mesh and the contraction count of `Simplifier::run`
 /// (on a four-thread pool, so that it takes its batched walk, whatever
 /// this machine has) and of a `step` loop (one candidate at a time).
+/// With `wedges`, both track them (seams become feature lines).
 type Outcome = (ProgressiveMesh, usize, usize);
-fn run_and_step(m: &Mesh, opts: &SimplifyOptions) -> (Outcome, Outcome) {
+fn run_and_step(
+    m: &Mesh,
+    opts: &SimplifyOptions,
+    wedges: Option<Vec<[u32; 3]>>,
+) -> (Outcome, Outcome) {
+    let start = || {
+        let mut s = Simplifier::new(m, opts).unwrap();
+        if let Some(w) = &wedges {
+            s.set_wedges(w.clone());
+        }
+        s
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(4)
         .build()
         .unwrap();
     let ran = pool.install(|| {
-        let mut s = Simplifier::new(m, opts).unwrap();
+        let mut s = start();
         s.run();
         let (pm, st) = s.finish();
         (pm, st.collapses, st.rejected.total())
     });
-    let mut s = Simplifier::new(m, opts).unwrap();
+    let mut s = start();
     while s.step().is_ok() {}
     let (pm, st) = s.finish();
     (ran, (pm, st.collapses, st.rejected.total()))
@@ -192,10 +204,16 @@ proptest! {
     }
 
     #[test]
-    fn run_equals_stepping(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.5, tau in 0.0f64..0.2) {
+    fn run_equals_stepping(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.5, tau in 0.0f64..0.2, seams in any::<bool>()) {
         let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio).with_tau(Tau::Absolute(tau));
-        let (a, b) = run_and_step(&m, &opts);
+        // seams: every fifth triangle's corners get wedges of their own
+        let wedges = seams.then(|| {
+            m.triangles.iter().enumerate()
+                .map(|(t, tri)| tri.map(|v| 2 * v + u32::from(t % 5 == 0)))
+                .collect()
+        });
+        let (a, b) = run_and_step(&m, &opts, wedges);
         prop_assert_eq!(a, b);
     }
 
@@ -218,7 +236,8 @@ fn the_batched_walk_contracts_exactly_what_stepping_does_on_the_cow() {
     let (p, idx) = common::read_obj(&text);
     let m = prepare(&p, &idx).unwrap().mesh;
     for ratio in [0.5, 0.02] {
-        let (ran, stepped) = run_and_step(&m, &SimplifyOptions::DEFAULT.with_target_ratio(ratio));
+        let (ran, stepped) =
+            run_and_step(&m, &SimplifyOptions::DEFAULT.with_target_ratio(ratio), None);
         assert!(ran.1 > 1000, "{} contractions", ran.1);
         assert_eq!(ran, stepped, "ratio {ratio}");
     }
