@@ -1432,20 +1432,23 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
 ) -> Result<(), Rejected> {
     for (moving, other) in [(v0, v1), (v1, v0)] {
         let pm = dv(f.pos[moving as usize]);
+        if pm == p {
+            continue; // (a half-edge survivor) its faces do not move
+        }
         for &t in f.vtris.fan(moving) {
             if !f.alive[t as usize] {
                 continue;
             }
             let tri = f.tris[t as usize];
-            if tri.contains(&other) {
+            // the two other corners, in the triangle's winding order
+            let (b, c) = match tri {
+                [x, b, c] | [c, x, b] | [b, c, x] if x == moving => (b, c),
+                _ => continue, // (not on `moving`: a dead vertex's stale list)
+            };
+            if b == other || c == other {
                 continue;
             }
-            // the two other corners, in the triangle's winding order
-            let k = tri.iter().position(|&x| x == moving).unwrap_or(0);
-            let (b, c) = (
-                dv(f.pos[tri[(k + 1) % 3] as usize]),
-                dv(f.pos[tri[(k + 2) % 3] as usize]),
-            );
+            let (b, c) = (dv(f.pos[b as usize]), dv(f.pos[c as usize]));
             let bc = c - b;
             let n_old = (b - pm).cross(bc);
             let n_new = (b - p).cross(bc);
@@ -1454,7 +1457,10 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
                 if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
                     return Err(Rejected::Degenerate);
                 }
-                if n_old.dot(n_new) < FLIP_MIN_COS * (l_old * l_new).sqrt() {
+                // cos < FLIP_MIN_COS, without a square root: a negative
+                // dot product is a flip, else compare squares
+                let d = n_old.dot(n_new);
+                if d < 0.0 || d * d < FLIP_MIN_COS * FLIP_MIN_COS * (l_old * l_new) {
                     return Err(Rejected::Flip);
                 }
             }
