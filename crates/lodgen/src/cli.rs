@@ -454,6 +454,48 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
     Ok(())
 }
 
+/// Why a simplification stopped short of its target, in words: where it
+/// stopped, and the refusals that stopped it, most frequent first.
+pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> String {
+    let r = &stats.rejected;
+    let mut why: Vec<(usize, &str)> = vec![
+        (
+            r.feature,
+            "would move a seam, hard edge or material border off its line",
+        ),
+        (r.link, "would make the surface non-manifold"),
+        (r.flip, "would flip a face"),
+        (
+            r.duplicate,
+            "would flatten a closed part into a double-sided sheet",
+        ),
+        (r.degenerate, "would leave a sliver"),
+        (r.boundary_pinch, "would pinch two borders together"),
+        (
+            r.locked,
+            "would join two locked vertices (non-manifold input, or --boundary locked)",
+        ),
+        (r.error, "would exceed --max-error"),
+    ];
+    why.retain(|w| w.0 > 0);
+    why.sort_by_key(|w| std::cmp::Reverse(w.0));
+    let reasons: Vec<String> = why.iter().map(|(n, w)| format!("{n} {w}")).collect();
+    let head = match stop {
+        lodgen_pm::StopReason::MaxError => "every remaining contraction exceeds the error bound",
+        _ => "no legal contraction is left",
+    };
+    format!(
+        "simplification stopped at {} triangles, before the coarsest requested level: {head}{}; \
+         coarser levels would repeat this one and are not written",
+        stats.output_triangles,
+        if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" (of the candidates refused, {})", reasons.join(", "))
+        }
+    )
+}
+
 /// The per-mesh table printed on stdout.
 pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
     let mut s = String::new();
@@ -470,11 +512,7 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
             st.stats.input_vertices
         );
         if st.stop != lodgen_pm::StopReason::Target {
-            s += &format!(
-                "  note: simplification stopped before the coarsest requested level: {:?} ({} rejected candidates)\n",
-                st.stop,
-                st.stats.rejected.total()
-            );
+            s += &format!("  note: {}\n", stop_note(st.stop, &st.stats));
         }
         s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
         for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {

@@ -383,3 +383,33 @@ fn every_method_builds_levels() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--method"));
 }
+
+#[test]
+fn a_mesh_that_cannot_reach_its_levels_says_where_it_stopped_and_why() {
+    // a tetrahedron cannot lose a face without flattening into a sheet
+    let d = tmp("tetra");
+    let input = d.join("tetra.obj");
+    std::fs::write(
+        &input,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n",
+    )
+    .unwrap();
+    let out = d.join("tetra.glb");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "--levels",
+        "50%,25%",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("simplification stopped at 4 triangles")
+            && text.contains("no legal contraction is left")
+            && text.contains("would flatten a closed part into a double-sided sheet")
+            && text.contains("are not written"),
+        "{text}"
+    );
+    publish(&[&out]);
+}
