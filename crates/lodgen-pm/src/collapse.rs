@@ -1311,13 +1311,16 @@ fn classify_vertex(
     boundary_weight: f64,
 ) -> VertexInfo {
     let mut quadric = Quadric::default();
-    // (neighbour, 1 = edge leaves v, fan slot)
-    let mut uses: SmallVec<[(u32, u8, u32); 32]> = SmallVec::new();
+    // neighbour << 32 | (1 = edge leaves v) << 31 | fan slot: one integer
+    // per use sorts as the tuple (neighbour, direction, slot) would
+    let mut uses: SmallVec<[u64; 32]> = SmallVec::new();
+    let edge_use =
+        |x: u32, leaves: u64, slot: usize| u64::from(x) << 32 | leaves << 31 | slot as u64;
     for (i, &t) in ts.iter().enumerate() {
         let tri = mesh.triangles[t as usize];
         let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-        uses.push((tri[(k + 1) % 3], 1, i as u32));
-        uses.push((tri[(k + 2) % 3], 0, i as u32));
+        uses.push(edge_use(tri[(k + 1) % 3], 1, i));
+        uses.push(edge_use(tri[(k + 2) % 3], 0, i));
         let [nx, ny, nz, d, w] = planes[t as usize];
         if w > 0.0 {
             quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
@@ -1333,15 +1336,19 @@ fn classify_vertex(
         i
     }
     let (mut boundary, mut locked) = (false, false);
-    for run in uses.chunk_by(|a, b| a.0 == b.0) {
-        match run {
-            [(x, _, slot)] => {
+    let neighbour = |u: u64| (u >> 32) as u32;
+    let leaves = |u: u64| u >> 31 & 1;
+    let slot = |u: u64| (u & 0x7fff_ffff) as u32;
+    for run in uses.chunk_by(|&a, &b| neighbour(a) == neighbour(b)) {
+        match *run {
+            [u] => {
+                let (x, s) = (neighbour(u), slot(u));
                 boundary = true;
                 if boundary_weight > 0.0 {
-                    let t = mesh.triangles[ts[*slot as usize] as usize];
+                    let t = mesh.triangles[ts[s as usize] as usize];
                     let (pa, pb) = (
                         dv(mesh.positions[v as usize]),
-                        dv(mesh.positions[*x as usize]),
+                        dv(mesh.positions[x as usize]),
                     );
                     let e = pb - pa;
                     let c = e.cross(face_normal(&mesh.positions, &t));
@@ -1363,8 +1370,8 @@ fn classify_vertex(
                     }
                 }
             }
-            [(_, da, sa), (_, db, sb)] if da != db => {
-                let (ra, rb) = (root(&mut parent, *sa), root(&mut parent, *sb));
+            [a, b] if leaves(a) != leaves(b) => {
+                let (ra, rb) = (root(&mut parent, slot(a)), root(&mut parent, slot(b)));
                 parent[ra.max(rb) as usize] = ra.min(rb);
             }
             _ => locked = true,
