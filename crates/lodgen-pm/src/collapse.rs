@@ -924,8 +924,8 @@ impl Simplifier {
     }
 
     /// The pass walk of [`Simplifier::step_pass`], a batch at a time, with
-    /// the same result contraction for contraction: the next `BATCH`
-    /// candidates are planned ([`Simplifier::plan`]: costing, placement and
+    /// the same result contraction for contraction: the next candidates
+    /// (one per 64 live triangles, at most `MAX_BATCH`) are planned ([`Simplifier::plan`]: costing, placement and
     /// legality, most of a step's work) in parallel on the mesh as it is,
     /// then walked in order exactly as `step_pass` would, contracting from
     /// the plans. A contraction changes nothing outside the closed
