@@ -413,3 +413,31 @@ fn a_mesh_that_cannot_reach_its_levels_says_where_it_stopped_and_why() {
     );
     publish(&[&out]);
 }
+
+#[test]
+fn output_does_not_depend_on_the_thread_count() {
+    // one thread steps serially; several plan the walk in parallel batches
+    let d = tmp("threads");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let mut outs = Vec::new();
+    for threads in ["1", "3"] {
+        let out = d.join(format!("t{threads}.glb"));
+        let o = Command::new(env!("CARGO_BIN_EXE_lodgen"))
+            .args([
+                input.to_str().unwrap(),
+                "--tau",
+                "1%",
+                "--progressive",
+                "-o",
+                out.to_str().unwrap(),
+                "-q",
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        outs.push(std::fs::read(out).unwrap());
+    }
+    assert!(outs[0] == outs[1], "1 and 3 threads wrote different files");
+}
