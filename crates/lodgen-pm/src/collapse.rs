@@ -436,11 +436,13 @@ impl Simplifier {
     }
 
     /// The contraction target and cost of the pair `(a, b)`.
+    #[inline]
     fn target_of(&self, a: u32, b: u32) -> (DVec3, f64) {
         self.target_with(&(self.quadric[a as usize] + self.quadric[b as usize]), a, b)
     }
 
     /// [`Simplifier::target_of`] with the pair's summed quadric `q` given.
+    #[inline]
     fn target_with(&self, q: &Quadric, a: u32, b: u32) -> (DVec3, f64) {
         let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
         match (self.locked[a as usize], self.locked[b as usize]) {
@@ -639,6 +641,7 @@ impl Simplifier {
 
     /// The order key of the pair `(a, b)`, `a < b`: its quadric cost, plus
     /// the attribute term, times the cost scale.
+    #[inline]
     fn key(&self, a: u32, b: u32) -> f32 {
         let (p, mut cost) = self.target_of(a, b);
         if let Some(at) = &self.attributes {

@@ -69,6 +69,7 @@ impl Quadric {
 
     /// The minimiser of `eval`, or `None` when the 3×3 block is
     /// ill-conditioned (see [`SINGULAR_RATIO`]).
+    #[inline]
     pub fn optimize(&self) -> Option<DVec3> {
         let (a, b, c) = (self.a2, self.ab, self.ac);
         let (e, f, i) = (self.b2, self.bc, self.c2);
@@ -101,6 +102,7 @@ impl Quadric {
     /// `t`, so its minimiser clamped to `[0, 1]` is at least as good as the
     /// ends and the midpoint; they are compared only when the quadratic is
     /// flat or the minimiser is not finite.
+    #[inline]
     pub fn best_on_segment(&self, p0: DVec3, p1: DVec3) -> (DVec3, f64) {
         let d = p1 - p0;
         let a = d.dot(self.mul3(d));
@@ -125,6 +127,7 @@ impl Quadric {
     /// The optimal contraction target for a pair at `p0`, `p1`: the solution
     /// of the 3×3 system when it is well conditioned and near the pair, else
     /// [`Quadric::best_on_segment`].
+    #[inline]
     pub fn placement(&self, p0: DVec3, p1: DVec3) -> (DVec3, f64) {
         if let Some(p) = self.optimize() {
             let reach2 = MAX_OPTIMUM_REACH * MAX_OPTIMUM_REACH * (p1 - p0).length_squared();
