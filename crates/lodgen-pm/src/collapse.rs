@@ -1061,44 +1061,17 @@ impl Simplifier {
         if let Some(f) = &self.features {
             f.allows(v0, v1)?;
         }
-        // Triangles on both vertices (deleted), and the link condition:
-        // the only common neighbours are the opposite ones.
-        let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
-        let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
-        let common = with_marks(self.pos.len(), |mark, g| {
-            // the one-ring of v0 gets g, its vertices also on v1's get g + 1
-            for &t in self.vtris.fan(v0) {
-                if !self.tri_alive[t as usize] {
-                    continue;
-                }
-                let tri = self.tris[t as usize];
-                if tri.contains(&v1) {
-                    shared.push(t);
-                    if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
-                        opposite.push(o);
-                    }
-                }
-                for &x in &tri {
-                    mark[x as usize] = g;
-                }
-            }
-            if shared.len() > 2 || (shared.len() == 2 && self.boundary[i0] && self.boundary[i1]) {
-                return 0;
-            }
-            let mut common = 0;
-            for &t in self.vtris.fan(v1) {
-                if !self.tri_alive[t as usize] {
-                    continue;
-                }
-                for &x in &self.tris[t as usize] {
-                    if x != v1 && x != v0 && mark[x as usize] == g {
-                        mark[x as usize] = g + 1; // count each once
-                        common += 1;
-                    }
-                }
-            }
-            common
-        });
+        let faces = Faces {
+            tris: &self.tris,
+            alive: &self.tri_alive,
+            vtris: &self.vtris,
+            pos: &self.pos,
+        };
+        let Link {
+            shared,
+            opposite,
+            common,
+        } = link(faces, v0, v1);
         if shared.len() == 2 && self.boundary[i0] && self.boundary[i1] {
             return Err(Rejected::BoundaryPinch);
         }
@@ -1108,18 +1081,7 @@ impl Simplifier {
         if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
             return Err(Rejected::Link);
         }
-        moved_faces_ok(
-            Faces {
-                tris: &self.tris,
-                alive: &self.tri_alive,
-                vtris: &self.vtris,
-                pos: &self.pos,
-            },
-            v0,
-            v1,
-            p,
-            &opposite,
-        )?;
+        moved_faces_ok(faces, v0, v1, p, &opposite)?;
         Ok(shared)
     }
 
@@ -1418,12 +1380,76 @@ fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
 
 /// The mesh state the legality tests read (shared by `Simplifier` and the
 /// curvature-adaptive sweeps).
-#[derive(Clone, Copy)]
 pub(crate) struct Faces<'a, F: FanLookup + ?Sized> {
     pub tris: &'a [[u32; 3]],
     pub alive: &'a [bool],
     pub vtris: &'a F,
     pub pos: &'a [[f32; 3]],
+}
+
+// (by hand: a derive would ask `F: Copy`, and `F` is only borrowed)
+impl<F: FanLookup + ?Sized> Clone for Faces<'_, F> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<F: FanLookup + ?Sized> Copy for Faces<'_, F> {}
+
+/// What the link condition of contracting `v0` into `v1` reads: the live
+/// triangles on both (deleted by the contraction), their third vertices,
+/// and how many distinct vertices besides the two are on both one-rings.
+/// The condition holds when `common == shared.len()` and the opposite
+/// vertices differ.
+pub(crate) struct Link {
+    pub shared: SmallVec<[u32; 2]>,
+    pub opposite: SmallVec<[u32; 2]>,
+    pub common: usize,
+}
+
+/// The [`Link`] of `v0` and `v1` (on this thread's vertex marks: it only
+/// reads the mesh, so that the batched walk can run it on many pairs).
+pub(crate) fn link<F: FanLookup + ?Sized>(f: Faces<'_, F>, v0: u32, v1: u32) -> Link {
+    let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
+    let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
+    let common = with_marks(f.pos.len(), |mark, g| {
+        // the one-ring of v0 gets g, its vertices also on v1's get g + 1
+        for &t in f.vtris.fan(v0) {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            let tri = f.tris[t as usize];
+            if tri.contains(&v1) {
+                shared.push(t);
+                if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
+                    opposite.push(o);
+                }
+            }
+            for &x in &tri {
+                mark[x as usize] = g;
+            }
+        }
+        if shared.len() > 2 {
+            return 0; // fails anyway
+        }
+        let mut common = 0;
+        for &t in f.vtris.fan(v1) {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            for &x in &f.tris[t as usize] {
+                if x != v1 && x != v0 && mark[x as usize] == g {
+                    mark[x as usize] = g + 1; // count each once
+                    common += 1;
+                }
+            }
+        }
+        common
+    });
+    Link {
+        shared,
+        opposite,
+        common,
+    }
 }
 
 /// The geometric legality of contracting `v0` into `v1` at `p`, `shared`

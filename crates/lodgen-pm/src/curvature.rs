@@ -64,8 +64,8 @@
 //! engine. Does no I/O and never prints.
 
 use crate::collapse::{
-    fan_count, moved_faces_ok, Faces, PhaseTimes, Rejected, Rejections, Simplifier, Stats,
-    StopReason,
+    fan_count, link, moved_faces_ok, Faces, Link, PhaseTimes, Rejected, Rejections, Simplifier,
+    Stats, StopReason,
 };
 use crate::mesh::{prepare, Mesh, MeshError};
 use crate::options::SimplifyOptions;
@@ -630,9 +630,6 @@ struct Engine {
     log: Log,
     /// `v1`'s quadric before each logged contraction (for rollback).
     saved_quadric: Vec<Quadric>,
-    /// Per-vertex marks with a generation counter.
-    mark: Vec<u32>,
-    generation: u32,
     report: AdaptiveReport,
     stats: Stats,
 }
@@ -685,8 +682,6 @@ impl Engine {
             live_tris: mesh.triangles.len(),
             log: Log::default(),
             saved_quadric: Vec::new(),
-            mark: vec![0; nv],
-            generation: 0,
             report: AdaptiveReport {
                 method,
                 stop: AdaptiveStop::Target,
@@ -703,15 +698,6 @@ impl Engine {
             },
             stats,
         }
-    }
-
-    fn next_generation(&mut self) -> u32 {
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.mark.fill(0);
-            self.generation = 1;
-        }
-        self.generation
     }
 
     fn reject(&mut self, r: Rejected) {
@@ -900,57 +886,21 @@ impl Engine {
         if self.fixed[i0] || self.fixed[i1] {
             return Err(Rejected::Locked);
         }
-        let g = self.next_generation();
-        let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
-        let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
-        for &t in &self.vtris[i0] {
-            if !self.tri_alive[t as usize] {
-                continue;
-            }
-            let tri = self.tris[t as usize];
-            if tri.contains(&v1) {
-                shared.push(t);
-                if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
-                    opposite.push(o);
-                }
-            }
-            for &x in &tri {
-                if x != v0 {
-                    self.mark[x as usize] = g;
-                }
-            }
-        }
-        if shared.len() != 2 {
+        let faces = Faces {
+            tris: &self.tris,
+            alive: &self.tri_alive,
+            vtris: self.vtris.as_slice(),
+            pos: &self.pos,
+        };
+        let Link {
+            shared,
+            opposite,
+            common,
+        } = link(faces, v0, v1);
+        if shared.len() != 2 || common != 2 || opposite[0] == opposite[1] {
             return Err(Rejected::Link);
         }
-        let g2 = self.next_generation();
-        let mut common = 0;
-        for &t in &self.vtris[i1] {
-            if !self.tri_alive[t as usize] {
-                continue;
-            }
-            for &x in &self.tris[t as usize] {
-                if x != v1 && x != v0 && self.mark[x as usize] == g {
-                    self.mark[x as usize] = g2;
-                    common += 1;
-                }
-            }
-        }
-        if common != 2 || opposite[0] == opposite[1] {
-            return Err(Rejected::Link);
-        }
-        moved_faces_ok(
-            Faces {
-                tris: &self.tris,
-                alive: &self.tri_alive,
-                vtris: self.vtris.as_slice(),
-                pos: &self.pos,
-            },
-            v0,
-            v1,
-            p,
-            &opposite,
-        )?;
+        moved_faces_ok(faces, v0, v1, p, &opposite)?;
         Ok(shared)
     }
 
