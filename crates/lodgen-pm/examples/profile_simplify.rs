@@ -9,12 +9,11 @@
 use std::time::Instant;
 
 use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
-use lodgen_pm::shapes::subdivide;
 use lodgen_pm::{prepare, Schedule, Simplifier, SimplifyOptions};
 
 #[path = "common/mod.rs"]
 mod common;
-use common::load_obj;
+use common::mesh_from_args;
 
 /// Peak resident memory (kB) since the last `reset_peak`.
 fn peak_kb() -> u64 {
@@ -35,16 +34,8 @@ fn reset_peak() {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let path = args
-        .get(1)
-        .cloned()
-        .unwrap_or_else(|| "../shared/assets/bunny.obj".into());
-    let subdivisions: usize = args.get(2).map_or(0, |s| s.parse().unwrap());
     let ratio: f64 = args.get(3).map_or(0.02, |s| s.parse().unwrap());
-    let mut m = load_obj(&path);
-    for _ in 0..subdivisions {
-        m = subdivide(&m);
-    }
+    let m = mesh_from_args(&args);
     let indices = m.indices();
     let n = m.triangles.len();
     let schedule = match args.get(4).map(String::as_str) {

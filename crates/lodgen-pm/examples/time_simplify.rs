@@ -8,25 +8,16 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
 
-use lodgen_pm::shapes::subdivide;
 use lodgen_pm::{simplify, SimplifyOptions};
 
 #[path = "common/mod.rs"]
 mod common;
-use common::load_obj;
+use common::mesh_from_args;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let path = args
-        .get(1)
-        .cloned()
-        .unwrap_or_else(|| "../shared/assets/bunny.obj".into());
-    let subdivisions: usize = args.get(2).map_or(0, |s| s.parse().unwrap());
     let runs: usize = args.get(3).map_or(9, |s| s.parse().unwrap());
-    let mut m = load_obj(&path);
-    for _ in 0..subdivisions {
-        m = subdivide(&m);
-    }
+    let m = mesh_from_args(&args);
     let indices = m.indices();
     let n = m.triangles.len();
     let mut times = Vec::new();

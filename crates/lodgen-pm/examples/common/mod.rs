@@ -1,8 +1,25 @@
 //! What the examples share: a minimal OBJ reader (`v` and `f` lines only,
-//! polygons fanned), enough for the shared test meshes. Examples panic on a
-//! bad file; the product's reader is `lodgen::io`.
+//! polygons fanned), enough for the shared test meshes, and their first two
+//! arguments. Examples panic on a bad file; the product's reader is
+//! `lodgen::io`.
 
+use lodgen_pm::shapes::subdivide;
 use lodgen_pm::Mesh;
+
+/// The mesh the first two arguments name: an OBJ file (default: the shared
+/// bunny) subdivided by midpoints that many times (default 0).
+#[allow(dead_code)] // (not every example takes these arguments)
+pub fn mesh_from_args(args: &[String]) -> Mesh {
+    let path = args
+        .get(1)
+        .map_or("../shared/assets/bunny.obj", String::as_str);
+    let subdivisions: usize = args.get(2).map_or(0, |s| s.parse().unwrap());
+    let mut m = load_obj(path);
+    for _ in 0..subdivisions {
+        m = subdivide(&m);
+    }
+    m
+}
 
 pub fn load_obj(path: &str) -> Mesh {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
