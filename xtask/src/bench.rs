@@ -197,21 +197,7 @@ pub fn child(args: &[String]) -> Result<()> {
 }
 
 pub fn run(args: &[String]) -> Result<()> {
-    if cfg!(debug_assertions) {
-        // `cargo xtask` builds the dev profile (opt-level 1 for the
-        // workspace's crates): timing that would understate lodgen against
-        // meshoptimizer's optimised C. Run the release build instead.
-        eprintln!("bench: running the release build of xtask");
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let status = Command::new(cargo)
-            .args(["run", "--release", "--quiet", "-p", "xtask", "--", "bench"])
-            .args(args)
-            .current_dir(crate::workspace_root())
-            .status()
-            .context("running cargo")?;
-        if !status.success() {
-            bail!("the release bench failed ({status})");
-        }
+    if crate::rerun_in_release("bench", args)? {
         return Ok(());
     }
     let quick = args.iter().any(|a| a == "--quick");

@@ -199,6 +199,9 @@ fn stop_note(r: &AdaptiveReport) -> String {
 }
 
 pub fn run(args: &[String]) -> Result<()> {
+    if crate::rerun_in_release("compare", args)? {
+        return Ok(());
+    }
     let mut meshes: Vec<&'static str> = MESHES.to_vec();
     let mut pictures = true;
     let mut it = args.iter();

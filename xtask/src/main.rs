@@ -48,6 +48,25 @@ fn main() -> anyhow::Result<()> {
     }
 }
 
+/// For the tasks that time things: when this is the dev build (what the
+/// `cargo xtask` alias builds, opt-level 1 for the workspace's crates),
+/// run `task` from the release build instead and return `true` once it
+/// succeeded; `false` when this already is the release build.
+pub fn rerun_in_release(task: &str, args: &[String]) -> anyhow::Result<bool> {
+    if !cfg!(debug_assertions) {
+        return Ok(false);
+    }
+    eprintln!("{task}: running the release build of xtask (times of the dev build mislead)");
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let status = std::process::Command::new(cargo)
+        .args(["run", "--release", "--quiet", "-p", "xtask", "--", task])
+        .args(args)
+        .current_dir(workspace_root())
+        .status()?;
+    anyhow::ensure!(status.success(), "the release {task} failed ({status})");
+    Ok(true)
+}
+
 /// The workspace root (the parent of `xtask/`).
 pub fn workspace_root() -> PathBuf {
     let xtask = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
