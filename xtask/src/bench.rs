@@ -196,6 +196,20 @@ pub fn child(args: &[String]) -> Result<()> {
     Ok(())
 }
 
+/// `xtask bench-child TOOL MESH RUNS` in a process of its own; its JSON line.
+fn run_child(exe: &std::path::Path, tool: &str, mesh: &str, runs: usize) -> Result<Value> {
+    let out = Command::new(exe)
+        .args(["bench-child", tool, mesh, &runs.to_string()])
+        .output()?;
+    if !out.status.success() {
+        bail!(
+            "bench-child {tool} {mesh} failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    Ok(serde_json::from_slice(&out.stdout)?)
+}
+
 pub fn run(args: &[String]) -> Result<()> {
     if crate::rerun_in_release("bench", args)? {
         return Ok(());
@@ -225,16 +239,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &(id, runs) in meshes {
         let mut results = Vec::new();
         for tool in ["lodgen", "meshopt"] {
-            let out = Command::new(&exe)
-                .args(["bench-child", tool, id, &runs.to_string()])
-                .output()?;
-            if !out.status.success() {
-                bail!(
-                    "bench-child {tool} {id} failed: {}",
-                    String::from_utf8_lossy(&out.stderr)
-                );
-            }
-            let v: Value = serde_json::from_slice(&out.stdout)?;
+            let v = run_child(&exe, tool, id, runs)?;
             let h = |i: usize| {
                 v["levels"][i]["hausdorff_percent"]
                     .as_f64()
@@ -257,16 +262,7 @@ pub fn run(args: &[String]) -> Result<()> {
         }
         let ratio = results[0]["time_ms"].as_f64().unwrap_or(f64::NAN)
             / results[1]["time_ms"].as_f64().unwrap_or(f64::NAN);
-        let pairs = Command::new(&exe)
-            .args(["bench-child", "pairs", id, &(2 * runs + 1).to_string()])
-            .output()?;
-        if !pairs.status.success() {
-            bail!(
-                "bench-child pairs {id} failed: {}",
-                String::from_utf8_lossy(&pairs.stderr)
-            );
-        }
-        let p: Value = serde_json::from_slice(&pairs.stdout)?;
+        let p = run_child(&exe, "pairs", id, 2 * runs + 1)?;
         println!(
             "{id}: time lodgen / meshopt = {ratio:.2} (medians above); interleaved, run by run: {:.2} (quartiles {:.2}–{:.2}, {} pairs)",
             p["ratio_median"].as_f64().unwrap_or(f64::NAN),
