@@ -12,7 +12,7 @@ use crate::heap::{f32_order_key, Buckets, QuadHeap};
 use crate::mesh::{Mesh, MeshError};
 use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
 use crate::pairs;
-use crate::quadric::Quadric;
+use crate::quadric::{CostLanes, Quadric, LANES};
 use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh, Removed};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -656,10 +656,23 @@ impl Simplifier {
             let fan0 = self.vtris.fan(v0);
             cost += at.cost(v0, v1, p, &self.tris, fan0, &self.tri_alive, w);
         }
+        self.scaled(cost, a, b)
+    }
+
+    /// The heap key from the pair's cost: times the cost scale, as `f32`.
+    #[inline]
+    fn scaled(&self, mut cost: f64, a: u32, b: u32) -> f32 {
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
         }
         cost as f32
+    }
+
+    /// Neither locked, pinned nor fixed: a pair of two such vertices takes
+    /// [`Quadric::placement`] in `target_with`.
+    #[inline]
+    fn free(&self, v: u32) -> bool {
+        !self.locked[v as usize] && !self.pinned(v) && !self.fixed(v)
     }
 
     /// Live triangles now.
@@ -781,10 +794,23 @@ impl Simplifier {
         const CHUNK: usize = 2048;
         let nv = self.pos.len();
         let this = &*self;
+        // pairs that take `placement` (most) are costed a lane batch at a
+        // time, the others one by one by `key`
+        let lanes_apply = self.attributes.is_none() && self.opts.placement == Placement::Optimal;
         let parts: Vec<Vec<PassEntry>> = (0..nv.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut out = Vec::with_capacity(3 * CHUNK);
+                let mut lanes = CostLanes::default();
+                // where each lane's entry is in `out`
+                let mut slots = [0usize; LANES];
+                let flush = |lanes: &mut CostLanes, out: &mut Vec<PassEntry>, slots: &[usize]| {
+                    let n = lanes.len();
+                    let costs = lanes.costs();
+                    for (&i, &cost) in slots[..n].iter().zip(&costs[..n]) {
+                        out[i].cost = this.scaled(cost, out[i].a, out[i].b);
+                    }
+                };
                 let mut nb: Vec<u32> = Vec::with_capacity(32);
                 for v in (c * CHUNK) as u32..((c + 1) * CHUNK).min(nv) as u32 {
                     let vi = v as usize;
@@ -815,7 +841,22 @@ impl Simplifier {
                     // sort by cost then gives the total order
                     nb.sort_unstable();
                     for &x in &nb {
-                        if !(this.locked[vi] && this.locked[x as usize]) {
+                        if this.locked[vi] && this.locked[x as usize] {
+                            continue;
+                        }
+                        if lanes_apply && this.free(v) && this.free(x) {
+                            slots[lanes.len()] = out.len();
+                            out.push(PassEntry {
+                                cost: 0.0,
+                                a: v,
+                                b: x,
+                            });
+                            let q = this.quadric[vi] + this.quadric[x as usize];
+                            lanes.push(&q, dv(this.pos[vi]), dv(this.pos[x as usize]));
+                            if lanes.is_full() {
+                                flush(&mut lanes, &mut out, &slots);
+                            }
+                        } else {
                             out.push(PassEntry {
                                 cost: this.key(v, x),
                                 a: v,
@@ -823,6 +864,9 @@ impl Simplifier {
                             });
                         }
                     }
+                }
+                if !lanes.is_empty() {
+                    flush(&mut lanes, &mut out, &slots);
                 }
                 out
             })

@@ -149,6 +149,146 @@ impl Quadric {
     }
 }
 
+/// How many pairs [`CostLanes`] costs at once.
+pub const LANES: usize = 8;
+
+/// Up to [`LANES`] pairs to be costed together by [`Quadric::placement`]'s
+/// rule, laid out one array per coefficient: the lanes are independent, so
+/// the divisions and square roots of one pair overlap with the others'
+/// (one pair at a time, costing waits on its own chain of them), and the
+/// compiler may pack two lanes per instruction. Every lane computes exactly
+/// the operations `placement` does, in the same order (no fused or
+/// reassociated arithmetic), so a lane's cost equals `placement`'s to the
+/// bit; a lane whose segment fallback has no finite interior minimum is
+/// left to `placement` itself (rare).
+#[derive(Clone, Debug, Default)]
+pub struct CostLanes {
+    len: usize,
+    /// The 10 coefficients of each lane's summed quadric, in [`Quadric`]'s
+    /// field order.
+    q: [[f64; LANES]; 10],
+    p0: [[f64; LANES]; 3],
+    p1: [[f64; LANES]; 3],
+}
+
+impl CostLanes {
+    /// Lanes in use.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    pub fn is_full(&self) -> bool {
+        self.len == LANES
+    }
+
+    /// Add the pair `q` = Q_a + Q_b at `p0`, `p1` (call only when not full).
+    #[inline]
+    pub fn push(&mut self, q: &Quadric, p0: DVec3, p1: DVec3) {
+        let l = self.len;
+        let c = [q.a2, q.ab, q.ac, q.ad, q.b2, q.bc, q.bd, q.c2, q.cd, q.d2];
+        for (k, v) in c.into_iter().enumerate() {
+            self.q[k][l] = v;
+        }
+        for k in 0..3 {
+            self.p0[k][l] = p0[k];
+            self.p1[k][l] = p1[k];
+        }
+        self.len += 1;
+    }
+
+    /// The costs of the pushed pairs, as [`Quadric::placement`] gives them,
+    /// in push order; empties the lanes.
+    pub fn costs(&mut self) -> [f64; LANES] {
+        let [a2, ab, ac, ad, b2, bc, bd, c2, cd, d2] = &self.q;
+        let [x0, y0, z0] = &self.p0;
+        let [x1, y1, z1] = &self.p1;
+        let mut out = [0.0; LANES];
+        let mut slow = [false; LANES];
+        for l in 0..LANES {
+            // `optimize`
+            let (a, b, c) = (a2[l], ab[l], ac[l]);
+            let (e, f, i) = (b2[l], bc[l], c2[l]);
+            let c00 = e * i - f * f;
+            let c01 = c * f - b * i;
+            let c02 = b * f - c * e;
+            let det = a * c00 + b * c01 + c * c02;
+            let norm2 = a * a + e * e + i * i + 2.0 * (b * b + c * c + f * f);
+            let norm3 = norm2 * norm2.sqrt();
+            let singular = det.is_nan() || det.abs() <= SINGULAR_RATIO * norm3;
+            let c11 = a * i - c * c;
+            let c12 = b * c - a * f;
+            let c22 = a * e - b * b;
+            let (rx, ry, rz) = (-ad[l], -bd[l], -cd[l]);
+            let inv = 1.0 / det;
+            let px = (c00 * rx + c01 * ry + c02 * rz) * inv;
+            let py = (c01 * rx + c11 * ry + c12 * rz) * inv;
+            let pz = (c02 * rx + c12 * ry + c22 * rz) * inv;
+            let finite = px.is_finite() && py.is_finite() && pz.is_finite();
+            // `placement`: near enough to the pair?
+            let (dx, dy, dz) = (x1[l] - x0[l], y1[l] - y0[l], z1[l] - z0[l]);
+            let reach2 = MAX_OPTIMUM_REACH * MAX_OPTIMUM_REACH * (dx * dx + dy * dy + dz * dz);
+            let (mx, my, mz) = (
+                (x0[l] + x1[l]) * 0.5,
+                (y0[l] + y1[l]) * 0.5,
+                (z0[l] + z1[l]) * 0.5,
+            );
+            let (ex, ey, ez) = (px - mx, py - my, pz - mz);
+            let optimal = !singular && finite && ex * ex + ey * ey + ez * ez <= reach2;
+            // `best_on_segment`, its usual case
+            let m3 = |vx: f64, vy: f64, vz: f64| {
+                (
+                    a * vx + b * vy + c * vz,
+                    b * vx + e * vy + f * vz,
+                    c * vx + f * vy + i * vz,
+                )
+            };
+            let (mdx, mdy, mdz) = m3(dx, dy, dz);
+            let sa = dx * mdx + dy * mdy + dz * mdz;
+            let (m0x, m0y, m0z) = m3(x0[l], y0[l], z0[l]);
+            let sb = (dx * m0x + dy * m0y + dz * m0z) + (dx * ad[l] + dy * bd[l] + dz * cd[l]);
+            let t = (-sb / sa).clamp(0.0, 1.0);
+            let (sx, sy, sz) = (x0[l] + dx * t, y0[l] + dy * t, z0[l] + dz * t);
+            slow[l] = !(optimal || sa > 0.0 && t.is_finite());
+            // `eval` at the chosen point
+            let (x, y, z) = if optimal { (px, py, pz) } else { (sx, sy, sz) };
+            let v = x * (a * x + 2.0 * (b * y + c * z + ad[l]))
+                + y * (e * y + 2.0 * (f * z + bd[l]))
+                + z * (i * z + 2.0 * cd[l])
+                + d2[l];
+            out[l] = v.max(0.0);
+        }
+        for l in 0..self.len {
+            if slow[l] {
+                let c = |k: usize| self.q[k][l];
+                let q = Quadric {
+                    a2: c(0),
+                    ab: c(1),
+                    ac: c(2),
+                    ad: c(3),
+                    b2: c(4),
+                    bc: c(5),
+                    bd: c(6),
+                    c2: c(7),
+                    cd: c(8),
+                    d2: c(9),
+                    weight: 0.0,
+                };
+                let p = |v: &[[f64; LANES]; 3]| DVec3::new(v[0][l], v[1][l], v[2][l]);
+                out[l] = q.placement(p(&self.p0), p(&self.p1)).1;
+            }
+        }
+        self.len = 0;
+        out
+    }
+}
+
 impl std::ops::Add for Quadric {
     type Output = Quadric;
     #[inline]
@@ -207,6 +347,64 @@ mod tests {
         let (p, c) = q.placement(DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -3.0));
         assert!(c < 1e-20, "the segment crosses the plane: cost {c}");
         assert!(p.z.abs() < 1e-12);
+    }
+
+    #[test]
+    fn lanes_cost_exactly_what_placement_costs() {
+        // well-conditioned corners, creases (segment fallback), single
+        // planes, zero quadrics on a zero-length pair (the slow lane), far
+        // optima: every kind of lane, more than one batch
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut cases = Vec::new();
+        for k in 0..203 {
+            let mut q = Quadric::default();
+            let planes = k % 5; // 0 to 4 planes
+            let c = DVec3::new(rnd(), rnd(), rnd());
+            for _ in 0..planes {
+                let n = DVec3::new(rnd(), rnd(), rnd());
+                let n = if k % 7 == 0 { DVec3::Z } else { n };
+                q += plane(n, c + DVec3::new(rnd(), rnd(), rnd()) * 0.1);
+            }
+            let p0 = DVec3::new(rnd(), rnd(), rnd());
+            let p1 = if k % 11 == 0 {
+                p0
+            } else {
+                p0 + DVec3::new(rnd(), rnd(), rnd()) * 0.01
+            };
+            cases.push((q, p0, p1));
+        }
+        // optima just inside and just outside MAX_OPTIMUM_REACH
+        for s in [1.9, 1.99, 2.01, 2.1] {
+            let c = DVec3::new(0.3, -0.2, 0.1);
+            let q = plane(DVec3::X, c) + plane(DVec3::Y, c) + plane(DVec3::Z, c);
+            let (u, e) = (DVec3::new(0.6, 0.8, 0.0), DVec3::Z);
+            let mid = c + u * (s * 0.05);
+            cases.push((q, mid - e * 0.025, mid + e * 0.025));
+        }
+        let mut lanes = CostLanes::default();
+        let mut got = Vec::new();
+        for (q, p0, p1) in &cases {
+            lanes.push(q, *p0, *p1);
+            if lanes.is_full() {
+                got.extend(lanes.costs());
+            }
+        }
+        let n = lanes.len();
+        got.extend(&lanes.costs()[..n]);
+        assert_eq!(got.len(), cases.len());
+        for ((q, p0, p1), c) in cases.iter().zip(got) {
+            assert_eq!(
+                c.to_bits(),
+                q.placement(*p0, *p1).1.to_bits(),
+                "{q:?} {p0} {p1}"
+            );
+        }
     }
 
     #[test]
