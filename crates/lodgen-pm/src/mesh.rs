@@ -159,6 +159,42 @@ fn validate_parts(
     Ok(())
 }
 
+/// `(z-order key << 32) | index` of each of `items` (indices into
+/// `positions`), sorted: the key interleaves 10 bits per axis of the
+/// position in the items' bounding box (a 1024³ grid is fine enough: the
+/// index breaks ties deterministically).
+fn morton_order(positions: &[[f32; 3]], items: &[u32]) -> Vec<u64> {
+    use rayon::prelude::*;
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for &i in items {
+        for (k, &x) in positions[i as usize].iter().enumerate() {
+            lo[k] = lo[k].min(f64::from(x));
+            hi[k] = hi[k].max(f64::from(x));
+        }
+    }
+    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    // spread the low 10 bits of x to every third bit
+    let spread = |x: u32| {
+        let mut x = x & 0x3ff;
+        x = (x | x << 16) & 0x0300_00ff;
+        x = (x | x << 8) & 0x0300_f00f;
+        x = (x | x << 4) & 0x030c_30c3;
+        (x | x << 2) & 0x0924_9249
+    };
+    let mut keys: Vec<u64> = items
+        .par_iter()
+        .map(|&i| {
+            let p = positions[i as usize];
+            let q = |k: usize| ((f64::from(p[k]) - lo[k]) * scale).clamp(0.0, 1023.0) as u32;
+            let key = spread(q(0)) | spread(q(1)) << 1 | spread(q(2)) << 2;
+            u64::from(key) << 32 | u64::from(i)
+        })
+        .collect();
+    keys.par_sort_unstable();
+    keys
+}
+
 /// "The first item with the same key": an open-addressing hash table of
 /// item indices, probed linearly. Items must be offered in increasing
 /// order; the result is then independent of the hash (deterministic).
@@ -205,9 +241,11 @@ impl FirstOf {
 /// Validate `positions` + triangle `indices`, weld identical positions, drop
 /// unused vertices and degenerate / duplicate triangles.
 ///
-/// Welded vertices are numbered in order of first use by the triangles, and
-/// kept triangles keep their input order and corner order, so the result is a
-/// pure function of the input.
+/// Welded vertices are numbered along a Z-order curve through their bounding
+/// box (ties by input index), kept triangles are ordered by their lowest
+/// welded corner, then input order, and keep their corner order: so the
+/// result is a pure function of the input, and neighbours are near each
+/// other in memory (see the comment inside).
 pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, MeshError> {
     if indices.len() % 3 != 0 {
         return Err(MeshError::IndexCount(indices.len()));
@@ -231,11 +269,6 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         .map(|i| table.first(i, |j| weld_key(&positions[j as usize])))
         .collect();
 
-    // Number welded vertices by first use; drop bad triangles.
-    let mut vertex_map = vec![u32::MAX; positions.len()];
-    let mut welded_positions = Vec::new();
-    let mut triangles = Vec::with_capacity(input_count);
-    let mut triangle_map = Vec::with_capacity(input_count);
     // Duplicates: keep the first triangle on each vertex set. Triangles
     // are grouped by their lowest corner (a counting sort; a group is one
     // vertex's fan, so the memory traffic stays local, unlike probing a
@@ -279,21 +312,56 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         }
     }
     drop((group, start));
+    // Number the used vertices along a Z-order (Morton) curve through their
+    // bounding box, ties by input index, and order the kept triangles by
+    // their lowest corner, then input order: a vertex's neighbours and
+    // triangles are then near it in memory. The simplifier reads one-rings
+    // in cost order, and its costing and walk wait on memory (first-use
+    // numbering of a scanned mesh puts a third of the edges 512+ vertices
+    // apart); this order made the bunny 10 % faster.
+    let mut vertex_map = vec![u32::MAX; positions.len()];
     for (ti, t) in input_triangles().enumerate() {
-        if !keep[ti] {
-            continue;
-        }
-        let tri = t.map(|i| {
-            let c = canonical[i as usize] as usize;
-            if vertex_map[c] == u32::MAX {
-                vertex_map[c] = welded_positions.len() as u32;
-                welded_positions.push(positions[c]);
+        if keep[ti] {
+            for i in t {
+                vertex_map[canonical[i as usize] as usize] = 0;
             }
-            vertex_map[c]
-        });
-        triangles.push(tri);
-        triangle_map.push(ti as u32);
+        }
     }
+    let used: Vec<u32> = (0..positions.len() as u32)
+        .filter(|&c| vertex_map[c as usize] == 0)
+        .collect();
+    let order = morton_order(positions, &used);
+    let welded_positions: Vec<[f32; 3]> = order
+        .iter()
+        .map(|&k| positions[(k & 0xffff_ffff) as usize])
+        .collect();
+    for (i, &k) in order.iter().enumerate() {
+        vertex_map[(k & 0xffff_ffff) as usize] = i as u32;
+    }
+    drop((order, used));
+    let corners = |t: [u32; 3]| t.map(|i| vertex_map[canonical[i as usize] as usize]);
+    let lowest = |t: [u32; 3]| *corners(t).iter().min().unwrap_or(&0) as usize;
+    let mut start = vec![0u32; welded_positions.len() + 1];
+    for (ti, t) in input_triangles().enumerate() {
+        if keep[ti] {
+            start[lowest(t) + 1] += 1;
+        }
+    }
+    for v in 0..welded_positions.len() {
+        start[v + 1] += start[v];
+    }
+    let kept = start[welded_positions.len()] as usize;
+    let mut triangles = vec![[0u32; 3]; kept];
+    let mut triangle_map = vec![0u32; kept];
+    for (ti, t) in input_triangles().enumerate() {
+        if keep[ti] {
+            let slot = &mut start[lowest(t)];
+            triangles[*slot as usize] = corners(t);
+            triangle_map[*slot as usize] = ti as u32;
+            *slot += 1;
+        }
+    }
+    drop(start);
     for i in 0..positions.len() {
         let c = canonical[i] as usize;
         vertex_map[i] = vertex_map[c];
@@ -339,7 +407,9 @@ mod tests {
         let idx = [0, 1, 2, 3, 4, 5, 0, 3, 1, 2, 1, 0, 7, 4, 5];
         let r = prepare(&p, &idx).unwrap();
         assert_eq!(r.mesh.positions.len(), 4);
-        assert_eq!(r.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        // numbered along the z-order curve: (0,0) (1,0) (0,1) (1,1)
+        assert_eq!(r.mesh.triangles, vec![[0, 1, 3], [0, 3, 2]]);
+        assert_eq!(r.mesh.positions[2], [0.0, 1.0, 0.0]);
         assert_eq!(r.triangle_map, vec![0, 1]);
         assert_eq!(r.stats.degenerate_triangles, 1);
         assert_eq!(r.stats.duplicate_triangles, 2);

@@ -460,7 +460,8 @@ fn fully_refined_stream_has_the_input_attributes_at_every_corner() {
     let wedges = c.wedges().unwrap();
     // every input triangle appears (as origin), with its corners' values
     for (t, origin) in out.pm.triangle_origin.iter().enumerate() {
-        let input = &idx[3 * *origin as usize..][..3];
+        let input = out.triangle_map[*origin as usize] as usize;
+        let input = &idx[3 * input..][..3];
         let tri = fine.triangles[t];
         for s in 0..3 {
             // the same corner, found by position (rotation kept by the log)
