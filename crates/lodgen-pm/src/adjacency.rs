@@ -3,9 +3,11 @@
 //! [`Fans`] keeps every vertex's triangles in one compressed array (CSR:
 //! one allocation for the whole mesh, lists in vertex order) and writes a
 //! vertex's list anew into an overflow arena when a contraction changes it.
-//! `rebuild` compacts both back into the CSR from the live triangles; the
-//! pass schedule does so between passes once the arena reaches half the
-//! CSR, the greedy one whenever it outgrows the CSR, so it stays bounded. (A `Vec` per vertex cost
+//! The pass schedule compacts both back into one CSR (`replace`) once the
+//! arena reaches half the CSR: the next pass's costing reads every live fan
+//! anyway and writes out its live triangles. The greedy schedule
+//! `rebuild`s from the live triangles whenever the arena outgrows the CSR.
+//! So the arena stays bounded. (A `Vec` per vertex cost
 //! one allocation per vertex to build and drop and one reallocation per
 //! contraction: 15 % of the bunny's instructions went to `malloc`/`free`.)
 //!
@@ -144,6 +146,27 @@ impl Fans {
         self.build(nv, tris, |t| alive[t]);
     }
 
+    /// Replace every list at once, compacted: `lists` holds the lists of
+    /// consecutive vertex ranges (one piece per range, in vertex order),
+    /// `lens` each vertex's length in its piece; together they must cover
+    /// every vertex.
+    pub fn replace(&mut self, lists: &[Vec<u32>], lens: &[Vec<u32>]) {
+        let total: usize = lists.iter().map(Vec::len).sum();
+        self.list.clear();
+        self.list.reserve_exact(total);
+        self.span.clear();
+        let mut start = 0u32;
+        for (piece, ls) in lists.iter().zip(lens) {
+            self.list.extend_from_slice(piece);
+            for &len in ls {
+                self.span.push([start, len]);
+                start += len;
+            }
+        }
+        self.arena.clear();
+        self.rewritten = 0;
+    }
+
     /// The arena's weight against the CSR: its triangles plus a word per
     /// list.
     fn arena_weight(&self) -> usize {
@@ -182,6 +205,13 @@ mod tests {
         f.set(0, &[1]);
         assert_eq!(f.fan(0), &[1]);
         assert_eq!(f.fan(1), &[0, 2]);
+        let mut g = f.clone();
+        g.replace(&[vec![1, 1], vec![2, 0]], &[vec![1, 1], vec![0, 2]]);
+        assert_eq!(g.fan(0), &[1]);
+        assert_eq!(g.fan(1), &[1]);
+        assert_eq!(g.fan(2), &[] as &[u32]);
+        assert_eq!(g.fan(3), &[2, 0]);
+        assert!(!g.half_dead());
         f.rebuild(&tris, &[true, false, true]);
         assert_eq!(f.fan(0), &[0]);
         assert_eq!(f.fan(2), &[0, 2]);

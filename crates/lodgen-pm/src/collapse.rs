@@ -787,20 +787,24 @@ impl Simplifier {
     /// but the mesh (not on the thread count).
     fn start_pass(&mut self, factor: f32) {
         let t0 = Instant::now();
-        // (the fans `new` builds are compact: the first pass needs no rebuild)
-        if self.vtris.half_dead() {
-            self.vtris.rebuild(&self.tris, &self.tri_alive);
-        }
+        // The costing reads every live vertex's fan and skips its dead
+        // triangles; once the rewritten lists reach half the CSR it also
+        // writes the live ones out, and they become the new CSR (compacted
+        // where they are read anyway, not by a pass over all triangles).
+        // (The fans `new` builds are compact: the first pass never does.)
+        let compact = self.vtris.half_dead();
         const CHUNK: usize = 2048;
         let nv = self.pos.len();
         let this = &*self;
         // pairs that take `placement` (most) are costed a lane batch at a
         // time, the others one by one by `key`
         let lanes_apply = self.attributes.is_none() && self.opts.placement == Placement::Optimal;
-        let parts: Vec<Vec<PassEntry>> = (0..nv.div_ceil(CHUNK))
+        let chunks: Vec<(Vec<PassEntry>, Vec<u32>, Vec<u32>)> = (0..nv.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut out = Vec::with_capacity(3 * CHUNK);
+                // compacted fans: the lists, and each vertex's length
+                let (mut fans, mut lens) = (Vec::new(), Vec::new());
                 let mut lanes = CostLanes::default();
                 // where each lane's entry is in `out`
                 let mut slots = [0usize; LANES];
@@ -815,6 +819,9 @@ impl Simplifier {
                 for v in (c * CHUNK) as u32..((c + 1) * CHUNK).min(nv) as u32 {
                     let vi = v as usize;
                     if !this.alive[vi] {
+                        if compact {
+                            lens.push(0);
+                        }
                         continue;
                     }
                     // neighbours above v, each once, in fan order
@@ -824,13 +831,20 @@ impl Simplifier {
                             nb.push(x);
                         }
                     };
+                    let before = fans.len();
                     for &t in this.vtris.fan(v) {
                         if this.tri_alive[t as usize] {
                             let [x, y, z] = this.tris[t as usize];
                             add(x);
                             add(y);
                             add(z);
+                            if compact {
+                                fans.push(t);
+                            }
                         }
+                    }
+                    if compact {
+                        lens.push((fans.len() - before) as u32);
                     }
                     for &x in this.partners(v) {
                         if this.alive[x as usize] {
@@ -868,9 +882,21 @@ impl Simplifier {
                 if !lanes.is_empty() {
                     flush(&mut lanes, &mut out, &slots);
                 }
-                out
+                (out, fans, lens)
             })
             .collect();
+        let mut parts = Vec::with_capacity(chunks.len());
+        if compact {
+            let (mut lists, mut lens) = (Vec::new(), Vec::new());
+            for (out, fans, len) in chunks {
+                parts.push(out);
+                lists.push(fans);
+                lens.push(len);
+            }
+            self.vtris.replace(&lists, &lens);
+        } else {
+            parts.extend(chunks.into_iter().map(|c| c.0));
+        }
         let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
         let mut buckets = Buckets::scatter(parts, &mut queue, |e| pass_bucket(e.cost));
         let goal = self.live_tris.saturating_sub(self.target);

@@ -159,12 +159,12 @@ fn validate_parts(
     Ok(())
 }
 
-/// `(z-order key << 32) | index` of each of `items` (indices into
-/// `positions`), sorted: the key interleaves 10 bits per axis of the
-/// position in the items' bounding box (a 1024³ grid is fine enough: the
-/// index breaks ties deterministically).
-fn morton_order(positions: &[[f32; 3]], items: &[u32]) -> Vec<u64> {
-    use rayon::prelude::*;
+/// `items` (indices into `positions`, increasing) in z-order: the key
+/// interleaves 10 bits per axis of the position in the items' bounding box
+/// (a 1024³ grid is fine enough), ties keep index order. A stable LSD radix
+/// sort, 10 bits a pass (a comparison sort of the keys was 25M
+/// instructions on the bunny, this is 2M).
+fn morton_order(positions: &[[f32; 3]], items: &[u32]) -> Vec<u32> {
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
     for &i in items {
         for (k, &x) in positions[i as usize].iter().enumerate() {
@@ -182,17 +182,30 @@ fn morton_order(positions: &[[f32; 3]], items: &[u32]) -> Vec<u64> {
         x = (x | x << 4) & 0x030c_30c3;
         (x | x << 2) & 0x0924_9249
     };
-    let mut keys: Vec<u64> = items
-        .par_iter()
-        .map(|&i| {
-            let p = positions[i as usize];
-            let q = |k: usize| ((f64::from(p[k]) - lo[k]) * scale).clamp(0.0, 1023.0) as u32;
-            let key = spread(q(0)) | spread(q(1)) << 1 | spread(q(2)) << 2;
-            u64::from(key) << 32 | u64::from(i)
-        })
-        .collect();
-    keys.par_sort_unstable();
-    keys
+    let key = |i: u32| {
+        let p = positions[i as usize];
+        let q = |k: usize| ((f64::from(p[k]) - lo[k]) * scale).clamp(0.0, 1023.0) as u32;
+        spread(q(0)) | spread(q(1)) << 1 | spread(q(2)) << 2
+    };
+    let mut cur: Vec<(u32, u32)> = items.iter().map(|&i| (key(i), i)).collect();
+    let mut next = vec![(0, 0); cur.len()];
+    for shift in [0, 10, 20] {
+        let digit = |k: u32| (k >> shift & 0x3ff) as usize;
+        let mut start = [0usize; 1025];
+        for &(k, _) in &cur {
+            start[digit(k) + 1] += 1;
+        }
+        for d in 0..1024 {
+            start[d + 1] += start[d];
+        }
+        for &e in &cur {
+            let slot = &mut start[digit(e.0)];
+            next[*slot] = e;
+            *slot += 1;
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
+    cur.into_iter().map(|(_, i)| i).collect()
 }
 
 /// "The first item with the same key": an open-addressing hash table of
@@ -269,99 +282,89 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         .map(|i| table.first(i, |j| weld_key(&positions[j as usize])))
         .collect();
 
-    // Duplicates: keep the first triangle on each vertex set. Triangles
-    // are grouped by their lowest corner (a counting sort; a group is one
-    // vertex's fan, so the memory traffic stays local, unlike probing a
-    // hash table of all triangles), and each group is sorted by the other
-    // two corners, then input order.
-    let sorted_key = |t: [u32; 3]| {
-        let mut k = t.map(|i| canonical[i as usize]);
-        k.sort_unstable();
-        (k[0] != k[1] && k[1] != k[2]).then_some(k)
+    // Number the used vertices (those on a non-degenerate triangle) along
+    // a z-order (Morton) curve through their bounding box, ties by input
+    // index, and order the kept triangles by their lowest corner: a
+    // vertex's neighbours and triangles are then near it in memory. The
+    // simplifier reads one-rings in cost order, and its costing and walk
+    // wait on memory (first-use numbering of a scanned mesh puts a third of
+    // the bunny's edges 512+ vertices apart); this order made it 10 %
+    // faster.
+    let distinct = |t: [u32; 3]| {
+        let k = t.map(|i| canonical[i as usize]);
+        k[0] != k[1] && k[1] != k[2] && k[0] != k[2]
     };
-    let mut start = vec![0u32; positions.len() + 1];
-    for t in input_triangles() {
-        match sorted_key(t) {
-            Some(k) => start[k[0] as usize + 1] += 1,
-            None => stats.degenerate_triangles += 1,
-        }
-    }
-    for v in 0..positions.len() {
-        start[v + 1] += start[v];
-    }
-    let mut group = vec![[0u32; 3]; start[positions.len()] as usize];
-    let mut next = start.clone();
-    for (ti, t) in input_triangles().enumerate() {
-        if let Some(k) = sorted_key(t) {
-            let slot = &mut next[k[0] as usize];
-            group[*slot as usize] = [k[1], k[2], ti as u32];
-            *slot += 1;
-        }
-    }
-    drop(next);
-    let mut keep = vec![false; input_count];
-    for w in start.windows(2) {
-        let g = &mut group[w[0] as usize..w[1] as usize];
-        g.sort_unstable();
-        for (i, e) in g.iter().enumerate() {
-            if i == 0 || g[i - 1][..2] != e[..2] {
-                keep[e[2] as usize] = true;
-            } else {
-                stats.duplicate_triangles += 1;
-            }
-        }
-    }
-    drop((group, start));
-    // Number the used vertices along a Z-order (Morton) curve through their
-    // bounding box, ties by input index, and order the kept triangles by
-    // their lowest corner, then input order: a vertex's neighbours and
-    // triangles are then near it in memory. The simplifier reads one-rings
-    // in cost order, and its costing and walk wait on memory (first-use
-    // numbering of a scanned mesh puts a third of the edges 512+ vertices
-    // apart); this order made the bunny 10 % faster.
     let mut vertex_map = vec![u32::MAX; positions.len()];
-    for (ti, t) in input_triangles().enumerate() {
-        if keep[ti] {
+    for t in input_triangles() {
+        if distinct(t) {
             for i in t {
                 vertex_map[canonical[i as usize] as usize] = 0;
             }
+        } else {
+            stats.degenerate_triangles += 1;
         }
     }
     let used: Vec<u32> = (0..positions.len() as u32)
         .filter(|&c| vertex_map[c as usize] == 0)
         .collect();
     let order = morton_order(positions, &used);
-    let welded_positions: Vec<[f32; 3]> = order
-        .iter()
-        .map(|&k| positions[(k & 0xffff_ffff) as usize])
-        .collect();
-    for (i, &k) in order.iter().enumerate() {
-        vertex_map[(k & 0xffff_ffff) as usize] = i as u32;
+    let welded_positions: Vec<[f32; 3]> = order.iter().map(|&c| positions[c as usize]).collect();
+    for (i, &c) in order.iter().enumerate() {
+        vertex_map[c as usize] = i as u32;
     }
     drop((order, used));
-    let corners = |t: [u32; 3]| t.map(|i| vertex_map[canonical[i as usize] as usize]);
-    let lowest = |t: [u32; 3]| *corners(t).iter().min().unwrap_or(&0) as usize;
-    let mut start = vec![0u32; welded_positions.len() + 1];
-    for (ti, t) in input_triangles().enumerate() {
-        if keep[ti] {
-            start[lowest(t) + 1] += 1;
+    let nv = welded_positions.len();
+    // Group the triangles by their lowest corner (a counting sort; a group
+    // is one vertex's fan, so the memory traffic stays local, unlike a hash
+    // table of all triangles), sort each group by the other two corners,
+    // then input order, and keep the first triangle on each vertex set
+    // (duplicates dropped): the kept triangles come out in the new order.
+    let welded = |t: [u32; 3]| t.map(|i| vertex_map[canonical[i as usize] as usize]);
+    let sorted_key = |t: [u32; 3]| {
+        let mut k = welded(t);
+        k.sort_unstable();
+        k
+    };
+    let mut start = vec![0u32; nv + 1];
+    for t in input_triangles() {
+        if distinct(t) {
+            start[sorted_key(t)[0] as usize + 1] += 1;
         }
     }
-    for v in 0..welded_positions.len() {
+    for v in 0..nv {
         start[v + 1] += start[v];
     }
-    let kept = start[welded_positions.len()] as usize;
-    let mut triangles = vec![[0u32; 3]; kept];
-    let mut triangle_map = vec![0u32; kept];
+    let mut group = vec![[0u32; 3]; start[nv] as usize];
+    let mut next = start.clone();
     for (ti, t) in input_triangles().enumerate() {
-        if keep[ti] {
-            let slot = &mut start[lowest(t)];
-            triangles[*slot as usize] = corners(t);
-            triangle_map[*slot as usize] = ti as u32;
+        if distinct(t) {
+            let k = sorted_key(t);
+            let slot = &mut next[k[0] as usize];
+            group[*slot as usize] = [k[1], k[2], ti as u32];
             *slot += 1;
         }
     }
-    drop(start);
+    drop(next);
+    let mut triangles = Vec::with_capacity(group.len());
+    let mut triangle_map = Vec::with_capacity(group.len());
+    for w in start.windows(2) {
+        let g = &mut group[w[0] as usize..w[1] as usize];
+        g.sort_unstable();
+        for (i, e) in g.iter().enumerate() {
+            if i == 0 || g[i - 1][..2] != e[..2] {
+                let ti = e[2] as usize;
+                triangles.push(welded([
+                    indices[3 * ti],
+                    indices[3 * ti + 1],
+                    indices[3 * ti + 2],
+                ]));
+                triangle_map.push(e[2]);
+            } else {
+                stats.duplicate_triangles += 1;
+            }
+        }
+    }
+    drop((group, start));
     for i in 0..positions.len() {
         let c = canonical[i] as usize;
         vertex_map[i] = vertex_map[c];
