@@ -5,6 +5,7 @@
 //!
 //! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
 
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// An indexed triangle mesh: `f32` positions, `u32` corner indices.
@@ -290,18 +291,28 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     // wait on memory (first-use numbering of a scanned mesh puts a third of
     // the bunny's edges 512+ vertices apart); this order made it 10 %
     // faster.
-    let distinct = |t: [u32; 3]| {
-        let k = t.map(|i| canonical[i as usize]);
-        k[0] != k[1] && k[1] != k[2] && k[0] != k[2]
-    };
-    let mut vertex_map = vec![u32::MAX; positions.len()];
-    for t in input_triangles() {
-        if distinct(t) {
-            for i in t {
-                vertex_map[canonical[i as usize] as usize] = 0;
+    // each triangle's corners as canonical vertices ([NONE; 3] when two
+    // are on one position: degenerate), then as welded ones
+    const NONE: u32 = u32::MAX;
+    let mut tris: Vec<[u32; 3]> = indices
+        .par_chunks_exact(3)
+        .map(|c| {
+            let k = [c[0], c[1], c[2]].map(|i| canonical[i as usize]);
+            if k[0] != k[1] && k[1] != k[2] && k[0] != k[2] {
+                k
+            } else {
+                [NONE; 3]
             }
-        } else {
+        })
+        .collect();
+    let mut vertex_map = vec![NONE; positions.len()];
+    for t in &tris {
+        if t[0] == NONE {
             stats.degenerate_triangles += 1;
+        } else {
+            for &c in t {
+                vertex_map[c as usize] = 0;
+            }
         }
     }
     let used: Vec<u32> = (0..positions.len() as u32)
@@ -313,62 +324,69 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         vertex_map[c as usize] = i as u32;
     }
     drop((order, used));
+    tris.par_iter_mut().for_each(|t| {
+        if t[0] != NONE {
+            *t = t.map(|c| vertex_map[c as usize]);
+        }
+    });
     let nv = welded_positions.len();
     // Group the triangles by their lowest corner (a counting sort; a group
     // is one vertex's fan, so the memory traffic stays local, unlike a hash
     // table of all triangles), sort each group by the other two corners,
     // then input order, and keep the first triangle on each vertex set
     // (duplicates dropped): the kept triangles come out in the new order.
-    let welded = |t: [u32; 3]| t.map(|i| vertex_map[canonical[i as usize] as usize]);
-    let sorted_key = |t: [u32; 3]| {
-        let mut k = welded(t);
+    let sorted = |t: [u32; 3]| {
+        let mut k = t;
         k.sort_unstable();
         k
     };
     let mut start = vec![0u32; nv + 1];
-    for t in input_triangles() {
-        if distinct(t) {
-            start[sorted_key(t)[0] as usize + 1] += 1;
+    for t in &tris {
+        if t[0] != NONE {
+            start[sorted(*t)[0] as usize + 1] += 1;
         }
     }
     for v in 0..nv {
         start[v + 1] += start[v];
     }
-    let mut group = vec![[0u32; 3]; start[nv] as usize];
+    let mut group = vec![0u32; start[nv] as usize];
     let mut next = start.clone();
-    for (ti, t) in input_triangles().enumerate() {
-        if distinct(t) {
-            let k = sorted_key(t);
-            let slot = &mut next[k[0] as usize];
-            group[*slot as usize] = [k[1], k[2], ti as u32];
+    for (ti, t) in tris.iter().enumerate() {
+        if t[0] != NONE {
+            let slot = &mut next[sorted(*t)[0] as usize];
+            group[*slot as usize] = ti as u32;
             *slot += 1;
         }
     }
     drop(next);
     let mut triangles = Vec::with_capacity(group.len());
     let mut triangle_map = Vec::with_capacity(group.len());
+    let others = |ti: u32| {
+        let k = sorted(tris[ti as usize]);
+        (k[1], k[2], ti)
+    };
     for w in start.windows(2) {
         let g = &mut group[w[0] as usize..w[1] as usize];
-        g.sort_unstable();
-        for (i, e) in g.iter().enumerate() {
-            if i == 0 || g[i - 1][..2] != e[..2] {
-                let ti = e[2] as usize;
-                triangles.push(welded([
-                    indices[3 * ti],
-                    indices[3 * ti + 1],
-                    indices[3 * ti + 2],
-                ]));
-                triangle_map.push(e[2]);
-            } else {
+        if g.len() > 1 {
+            g.sort_unstable_by_key(|&ti| others(ti));
+        }
+        let mut last = None;
+        for &ti in g.iter() {
+            let (k1, k2, _) = others(ti);
+            if last == Some((k1, k2)) {
                 stats.duplicate_triangles += 1;
+            } else {
+                last = Some((k1, k2));
+                triangles.push(tris[ti as usize]);
+                triangle_map.push(ti);
             }
         }
     }
-    drop((group, start));
+    drop((group, start, tris));
     for i in 0..positions.len() {
         let c = canonical[i] as usize;
         vertex_map[i] = vertex_map[c];
-        if c != i && vertex_map[c] != u32::MAX {
+        if c != i && vertex_map[c] != NONE {
             stats.welded_vertices += 1;
         }
     }
