@@ -184,6 +184,20 @@ impl Fans {
         2 * self.arena_weight() > self.list.len()
     }
 
+    /// Prefetch `v`'s span (where its list is).
+    #[inline]
+    pub fn prefetch_span(&self, v: u32) {
+        crate::collapse::prefetch(&self.span[v as usize]);
+    }
+
+    /// Prefetch the start of `v`'s list (its span must be at hand).
+    #[inline]
+    pub fn prefetch_fan(&self, v: u32) {
+        if let Some(t) = self.fan(v).first() {
+            crate::collapse::prefetch(t);
+        }
+    }
+
     /// Replace `v`'s list.
     pub fn set(&mut self, v: u32, tris: &[u32]) {
         self.span[v as usize] = [self.arena.len() as u32, tris.len() as u32 | ARENA];

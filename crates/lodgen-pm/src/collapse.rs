@@ -668,6 +668,30 @@ impl Simplifier {
         cost as f32
     }
 
+    /// Prefetch what planning the pair `(a, b)` reads first about its
+    /// vertices: their fan spans, quadrics and positions.
+    #[inline]
+    fn prefetch_vertices(&self, a: u32, b: u32) {
+        for v in [a, b] {
+            self.vtris.prefetch_span(v);
+            // 88 bytes, 8-aligned: up to three cache lines, each holding
+            // one of these fields
+            let q = &self.quadric[v as usize];
+            prefetch(&q.a2);
+            prefetch(&q.bc);
+            prefetch(&q.weight);
+            prefetch(&self.pos[v as usize]);
+        }
+    }
+
+    /// Prefetch the triangles of `v`'s fan (its list must be at hand).
+    #[inline]
+    fn prefetch_triangles(&self, v: u32) {
+        for &t in self.vtris.fan(v) {
+            prefetch(&self.tris[t as usize]);
+        }
+    }
+
     /// Neither locked, pinned nor fixed: a pair of two such vertices takes
     /// [`Quadric::placement`] in `target_with`.
     #[inline]
@@ -1036,12 +1060,40 @@ impl Simplifier {
             scan += 1;
         }
         let this = &*self;
+        // Plans wait on memory: the pairs are in cost order, so each one's
+        // neighbourhood is cold, and its fan → triangle → vertex loads
+        // depend on each other. Each thread plans a run of pairs and
+        // prefetches ahead: the vertex data of the pair four on, the fan
+        // lists of the pair two on, the triangles of the next pair.
+        let pair = |k: usize| {
+            let e = this.pass.queue[batch[k] as usize];
+            (e.a, e.b)
+        };
         let mut plans: Vec<Option<Result<Plan, Rejected>>> = batch
-            .par_iter()
-            .with_min_len(8)
-            .map(|&i| {
-                let e = this.pass.queue[i as usize];
-                Some(this.plan(e.a, e.b))
+            .par_chunks(32)
+            .enumerate()
+            .flat_map_iter(|(c, chunk)| {
+                let base = c * 32;
+                let mut out = Vec::with_capacity(chunk.len());
+                for k in base..base + chunk.len() {
+                    if k + 4 < base + chunk.len() {
+                        let (a, b) = pair(k + 4);
+                        this.prefetch_vertices(a, b);
+                    }
+                    if k + 2 < base + chunk.len() {
+                        let (a, b) = pair(k + 2);
+                        this.vtris.prefetch_fan(a);
+                        this.vtris.prefetch_fan(b);
+                    }
+                    if k + 1 < base + chunk.len() {
+                        let (a, b) = pair(k + 1);
+                        this.prefetch_triangles(a);
+                        this.prefetch_triangles(b);
+                    }
+                    let (a, b) = pair(k);
+                    out.push(Some(this.plan(a, b)));
+                }
+                out
             })
             .collect();
         let g = self.next_generation();
@@ -1644,4 +1696,19 @@ pub(crate) fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
     comp.sort_unstable();
     comp.dedup();
     comp.len()
+}
+
+/// A hint to bring `x`'s cache line in (nothing on targets without one).
+#[inline(always)]
+pub(crate) fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint to the cache: it reads no value and
+    // cannot fault, and `x` is a valid reference anyway.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+            (x as *const T).cast::<i8>(),
+        );
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
