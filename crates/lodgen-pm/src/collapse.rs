@@ -280,11 +280,12 @@ fn pass_bucket(cost: f32) -> usize {
     (f32_order_key(cost) >> 21) as usize
 }
 
-/// The order of a pass: by cost (`total_cmp`). Sorted stably from
-/// entries generated in (a, b) order, this is the total order (cost, a, b).
+/// The order of a pass: by cost (`total_cmp`), as a sort key. Sorted
+/// stably from entries generated in (a, b) order, this is the total order
+/// (cost, a, b).
 #[inline]
-fn pass_order(x: &PassEntry, y: &PassEntry) -> Ordering {
-    f32_order_key(x.cost).cmp(&f32_order_key(y.cost))
+fn pass_order(x: &PassEntry) -> u32 {
+    f32_order_key(x.cost)
 }
 
 #[inline]
