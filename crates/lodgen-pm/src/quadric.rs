@@ -1,8 +1,8 @@
 //! Garland–Heckbert quadric error metric (GH97, "Surface Simplification Using
 //! Quadric Error Metrics", SIGGRAPH 1997; seeds 000, 002, 003).
 //!
-//! Owns the [`Quadric`] value type and optimal placement. Knows nothing of
-//! meshes, pairs or heaps.
+//! Owns the [`Quadric`] value type and optimal placement, also for eight
+//! pairs at once ([`CostLanes`]). Knows nothing of meshes, pairs or heaps.
 
 use glam::DVec3;
 
