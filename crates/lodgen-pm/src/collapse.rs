@@ -1099,6 +1099,16 @@ impl Simplifier {
             .collect();
         let g = self.next_generation();
         for (k, &i) in batch.iter().enumerate() {
+            // (prefetching for the contractions ahead, as for the plans:
+            // what `contract` reads of the pair three on, and the fans and
+            // triangles of the next)
+            if let Some(Some(Ok(p))) = plans.get(k + 3) {
+                self.prefetch_vertices(p.v0, p.v1);
+            }
+            if let Some(Some(Ok(p))) = plans.get(k + 1) {
+                self.prefetch_triangles(p.v0);
+                self.vtris.prefetch_fan(p.v1);
+            }
             // what `step_inner` and `step_pass` check before a candidate
             if self.live_tris <= self.target {
                 self.pass.cursor = i as usize;
