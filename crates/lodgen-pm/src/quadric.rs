@@ -59,41 +59,25 @@ impl Quadric {
     /// `vᵀ Q v` with `v = (p, 1)`: the weighted sum of squared distances.
     #[inline]
     pub fn eval(&self, p: DVec3) -> f64 {
-        let (x, y, z) = (p.x, p.y, p.z);
-        let v = x * (self.a2 * x + 2.0 * (self.ab * y + self.ac * z + self.ad))
-            + y * (self.b2 * y + 2.0 * (self.bc * z + self.bd))
-            + z * (self.c2 * z + 2.0 * self.cd)
-            + self.d2;
-        v.max(0.0)
+        eval_at(&self.coefficients(), p.x, p.y, p.z)
+    }
+
+    /// `[a2, ab, ac, ad, b2, bc, bd, c2, cd, d2]`.
+    #[inline]
+    fn coefficients(&self) -> [f64; 10] {
+        [
+            self.a2, self.ab, self.ac, self.ad, self.b2, self.bc, self.bd, self.c2, self.cd,
+            self.d2,
+        ]
     }
 
     /// The minimiser of `eval`, or `None` when the 3×3 block is
     /// ill-conditioned (see [`SINGULAR_RATIO`]).
     #[inline]
     pub fn optimize(&self) -> Option<DVec3> {
-        let (a, b, c) = (self.a2, self.ab, self.ac);
-        let (e, f, i) = (self.b2, self.bc, self.c2);
-        // cofactors of the symmetric matrix [[a b c][b e f][c f i]]
-        let c00 = e * i - f * f;
-        let c01 = c * f - b * i;
-        let c02 = b * f - c * e;
-        let det = a * c00 + b * c01 + c * c02;
-        let norm2 = a * a + e * e + i * i + 2.0 * (b * b + c * c + f * f);
-        let norm3 = norm2 * norm2.sqrt();
-        if det.is_nan() || det.abs() <= SINGULAR_RATIO * norm3 {
-            return None;
-        }
-        let c11 = a * i - c * c;
-        let c12 = b * c - a * f;
-        let c22 = a * e - b * b;
-        let r = DVec3::new(-self.ad, -self.bd, -self.cd);
-        let inv = 1.0 / det;
-        let p = DVec3::new(
-            (c00 * r.x + c01 * r.y + c02 * r.z) * inv,
-            (c01 * r.x + c11 * r.y + c12 * r.z) * inv,
-            (c02 * r.x + c12 * r.y + c22 * r.z) * inv,
-        );
-        p.is_finite().then_some(p)
+        let (singular, [x, y, z]) = solve(&self.coefficients());
+        let p = DVec3::new(x, y, z);
+        (!singular && p.is_finite()).then_some(p)
     }
 
     /// The best point on the segment `p0–p1` (the fallback of GH97 §4 and of
@@ -147,6 +131,49 @@ impl Quadric {
             self.ac * v.x + self.bc * v.y + self.c2 * v.z,
         )
     }
+}
+
+/// [`Quadric::eval`] on the coefficients `[a2, ab, ac, ad, b2, bc, bd, c2,
+/// cd, d2]` (shared with [`CostLanes`], so that both do the same operations).
+#[inline(always)]
+fn eval_at(k: &[f64; 10], x: f64, y: f64, z: f64) -> f64 {
+    let [a2, ab, ac, ad, b2, bc, bd, c2, cd, d2] = *k;
+    let v = x * (a2 * x + 2.0 * (ab * y + ac * z + ad))
+        + y * (b2 * y + 2.0 * (bc * z + bd))
+        + z * (c2 * z + 2.0 * cd)
+        + d2;
+    v.max(0.0)
+}
+
+/// [`Quadric::optimize`]'s arithmetic on the coefficients (as in
+/// [`eval_at`]): whether the 3×3 block counts as singular (see
+/// [`SINGULAR_RATIO`]; the point is then meaningless), and the solution by
+/// cofactors.
+#[inline(always)]
+fn solve(k: &[f64; 10]) -> (bool, [f64; 3]) {
+    let (a, b, c) = (k[0], k[1], k[2]);
+    let (e, f, i) = (k[4], k[5], k[7]);
+    // cofactors of the symmetric matrix [[a b c][b e f][c f i]]
+    let c00 = e * i - f * f;
+    let c01 = c * f - b * i;
+    let c02 = b * f - c * e;
+    let det = a * c00 + b * c01 + c * c02;
+    let norm2 = a * a + e * e + i * i + 2.0 * (b * b + c * c + f * f);
+    let norm3 = norm2 * norm2.sqrt();
+    let singular = det.is_nan() || det.abs() <= SINGULAR_RATIO * norm3;
+    let c11 = a * i - c * c;
+    let c12 = b * c - a * f;
+    let c22 = a * e - b * b;
+    let (rx, ry, rz) = (-k[3], -k[6], -k[8]);
+    let inv = 1.0 / det;
+    (
+        singular,
+        [
+            (c00 * rx + c01 * ry + c02 * rz) * inv,
+            (c01 * rx + c11 * ry + c12 * rz) * inv,
+            (c02 * rx + c12 * ry + c22 * rz) * inv,
+        ],
+    )
 }
 
 /// How many pairs [`CostLanes`] costs at once.
@@ -212,24 +239,12 @@ impl CostLanes {
         let mut out = [0.0; LANES];
         let mut slow = [false; LANES];
         for l in 0..LANES {
+            let k = [
+                a2[l], ab[l], ac[l], ad[l], b2[l], bc[l], bd[l], c2[l], cd[l], d2[l],
+            ];
+            let (a, b, c, e, f, i) = (k[0], k[1], k[2], k[4], k[5], k[7]);
             // `optimize`
-            let (a, b, c) = (a2[l], ab[l], ac[l]);
-            let (e, f, i) = (b2[l], bc[l], c2[l]);
-            let c00 = e * i - f * f;
-            let c01 = c * f - b * i;
-            let c02 = b * f - c * e;
-            let det = a * c00 + b * c01 + c * c02;
-            let norm2 = a * a + e * e + i * i + 2.0 * (b * b + c * c + f * f);
-            let norm3 = norm2 * norm2.sqrt();
-            let singular = det.is_nan() || det.abs() <= SINGULAR_RATIO * norm3;
-            let c11 = a * i - c * c;
-            let c12 = b * c - a * f;
-            let c22 = a * e - b * b;
-            let (rx, ry, rz) = (-ad[l], -bd[l], -cd[l]);
-            let inv = 1.0 / det;
-            let px = (c00 * rx + c01 * ry + c02 * rz) * inv;
-            let py = (c01 * rx + c11 * ry + c12 * rz) * inv;
-            let pz = (c02 * rx + c12 * ry + c22 * rz) * inv;
+            let (singular, [px, py, pz]) = solve(&k);
             let finite = px.is_finite() && py.is_finite() && pz.is_finite();
             // `placement`: near enough to the pair?
             let (dx, dy, dz) = (x1[l] - x0[l], y1[l] - y0[l], z1[l] - z0[l]);
@@ -258,11 +273,7 @@ impl CostLanes {
             slow[l] = !(optimal || sa > 0.0 && t.is_finite());
             // `eval` at the chosen point
             let (x, y, z) = if optimal { (px, py, pz) } else { (sx, sy, sz) };
-            let v = x * (a * x + 2.0 * (b * y + c * z + ad[l]))
-                + y * (e * y + 2.0 * (f * z + bd[l]))
-                + z * (i * z + 2.0 * cd[l])
-                + d2[l];
-            out[l] = v.max(0.0);
+            out[l] = eval_at(&k, x, y, z);
         }
         for l in 0..self.len {
             if slow[l] {
