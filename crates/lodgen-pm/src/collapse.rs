@@ -1074,19 +1074,19 @@ impl Simplifier {
             .par_chunks(32)
             .enumerate()
             .flat_map_iter(|(c, chunk)| {
-                let base = c * 32;
+                let (base, end) = (c * 32, c * 32 + chunk.len());
                 let mut out = Vec::with_capacity(chunk.len());
-                for k in base..base + chunk.len() {
-                    if k + 4 < base + chunk.len() {
+                for k in base..end {
+                    if k + 4 < end {
                         let (a, b) = pair(k + 4);
                         this.prefetch_vertices(a, b);
                     }
-                    if k + 2 < base + chunk.len() {
+                    if k + 2 < end {
                         let (a, b) = pair(k + 2);
                         this.vtris.prefetch_fan(a);
                         this.vtris.prefetch_fan(b);
                     }
-                    if k + 1 < base + chunk.len() {
+                    if k + 1 < end {
                         let (a, b) = pair(k + 1);
                         this.prefetch_triangles(a);
                         this.prefetch_triangles(b);
