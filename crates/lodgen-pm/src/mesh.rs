@@ -324,26 +324,31 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         vertex_map[c as usize] = i as u32;
     }
     drop((order, used));
-    tris.par_iter_mut().for_each(|t| {
-        if t[0] != NONE {
+    // each kept triangle in the new numbering, and its corners sorted (the
+    // key that finds duplicates), once
+    let keys: Vec<[u32; 3]> = tris
+        .par_iter_mut()
+        .map(|t| {
+            if t[0] == NONE {
+                return [NONE; 3];
+            }
             *t = t.map(|c| vertex_map[c as usize]);
-        }
-    });
+            let mut k = *t;
+            k.sort_unstable();
+            k
+        })
+        .collect();
     let nv = welded_positions.len();
     // Group the triangles by their lowest corner (a counting sort; a group
     // is one vertex's fan, so the memory traffic stays local, unlike a hash
-    // table of all triangles), sort each group by the other two corners,
-    // then input order, and keep the first triangle on each vertex set
-    // (duplicates dropped): the kept triangles come out in the new order.
-    let sorted = |t: [u32; 3]| {
-        let mut k = t;
-        k.sort_unstable();
-        k
-    };
+    // table of all triangles), sort each group by the other two corners
+    // (stably: then input order), and keep the first triangle on each
+    // vertex set (duplicates dropped): the kept triangles come out in the
+    // new order.
     let mut start = vec![0u32; nv + 1];
-    for t in &tris {
-        if t[0] != NONE {
-            start[sorted(*t)[0] as usize + 1] += 1;
+    for k in &keys {
+        if k[0] != NONE {
+            start[k[0] as usize + 1] += 1;
         }
     }
     for v in 0..nv {
@@ -351,38 +356,62 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     }
     let mut group = vec![0u32; start[nv] as usize];
     let mut next = start.clone();
-    for (ti, t) in tris.iter().enumerate() {
-        if t[0] != NONE {
-            let slot = &mut next[sorted(*t)[0] as usize];
+    for (ti, k) in keys.iter().enumerate() {
+        if k[0] != NONE {
+            let slot = &mut next[k[0] as usize];
             group[*slot as usize] = ti as u32;
             *slot += 1;
         }
     }
     drop(next);
+    // in parallel over runs of vertices (their groups are disjoint runs of
+    // `group`), concatenated in order
+    const RUN: usize = 4096;
+    let mut runs = Vec::with_capacity(nv.div_ceil(RUN));
+    let mut rest = &mut group[..];
+    for lo in (0..nv).step_by(RUN) {
+        let hi = (lo + RUN).min(nv);
+        let (head, tail) = rest.split_at_mut((start[hi] - start[lo]) as usize);
+        runs.push((lo, hi, head));
+        rest = tail;
+    }
+    let others = |ti: u32| {
+        let k = keys[ti as usize];
+        u64::from(k[1]) << 32 | u64::from(k[2])
+    };
+    let kept: Vec<(Vec<[u32; 3]>, Vec<u32>, usize)> = runs
+        .into_par_iter()
+        .map(|(lo, hi, run)| {
+            let (mut kept, mut map, mut duplicates) = (Vec::new(), Vec::new(), 0);
+            let base = start[lo];
+            for v in lo..hi {
+                let g = &mut run[(start[v] - base) as usize..(start[v + 1] - base) as usize];
+                if g.len() > 1 {
+                    g.sort_by_key(|&ti| others(ti));
+                }
+                let mut last = None;
+                for &ti in g.iter() {
+                    let k = others(ti);
+                    if last == Some(k) {
+                        duplicates += 1;
+                    } else {
+                        last = Some(k);
+                        kept.push(tris[ti as usize]);
+                        map.push(ti);
+                    }
+                }
+            }
+            (kept, map, duplicates)
+        })
+        .collect();
     let mut triangles = Vec::with_capacity(group.len());
     let mut triangle_map = Vec::with_capacity(group.len());
-    let others = |ti: u32| {
-        let k = sorted(tris[ti as usize]);
-        (k[1], k[2], ti)
-    };
-    for w in start.windows(2) {
-        let g = &mut group[w[0] as usize..w[1] as usize];
-        if g.len() > 1 {
-            g.sort_unstable_by_key(|&ti| others(ti));
-        }
-        let mut last = None;
-        for &ti in g.iter() {
-            let (k1, k2, _) = others(ti);
-            if last == Some((k1, k2)) {
-                stats.duplicate_triangles += 1;
-            } else {
-                last = Some((k1, k2));
-                triangles.push(tris[ti as usize]);
-                triangle_map.push(ti);
-            }
-        }
+    for (t, m, d) in kept {
+        triangles.extend_from_slice(&t);
+        triangle_map.extend_from_slice(&m);
+        stats.duplicate_triangles += d;
     }
-    drop((group, start, tris));
+    drop((group, start, tris, keys));
     for i in 0..positions.len() {
         let c = canonical[i] as usize;
         vertex_map[i] = vertex_map[c];
@@ -438,6 +467,74 @@ mod tests {
         assert_eq!(r.stats.welded_vertices, 3);
         assert_eq!(r.vertex_map[6], u32::MAX);
         assert_eq!(r.vertex_map[7], 0);
+    }
+
+    /// Large enough for several parallel runs of the duplicate search: the
+    /// first of each set of triangles on the same three vertices is kept,
+    /// whichever run it falls in, with its winding, and the kept triangles
+    /// come out ordered by lowest corner.
+    #[test]
+    fn keeps_the_first_of_each_duplicate_across_runs() {
+        let n = 120u32; // 14,400 vertices: four runs
+        let p: Vec<[f32; 3]> = (0..n * n)
+            .map(|i| [(i % n) as f32, (i / n) as f32, ((i * 7) % 5) as f32])
+            .collect();
+        let mut idx = Vec::new();
+        for y in 0..n - 1 {
+            for x in 0..n - 1 {
+                let v = y * n + x;
+                idx.extend([v, v + 1, v + n + 1, v, v + n + 1, v + n]);
+            }
+        }
+        // duplicates (rotated, reversed) and degenerates, spread over the mesh
+        let base = idx.len() / 3;
+        let mut rng = 12345u64;
+        for _ in 0..3000 {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let t = (rng >> 33) as usize % base;
+            let [a, b, c] = [idx[3 * t], idx[3 * t + 1], idx[3 * t + 2]];
+            match rng >> 62 {
+                0 => idx.extend([b, c, a]),
+                1 => idx.extend([a, c, b]),
+                2 => idx.extend([a, a, b]),
+                _ => idx.extend([c, a, b]),
+            }
+        }
+        let r = prepare(&p, &idx).unwrap();
+        // the reference: first occurrence of each vertex set, in input order
+        let mut first = std::collections::BTreeMap::new();
+        let (mut degenerate, mut duplicates) = (0, 0);
+        for (t, c) in idx.chunks_exact(3).enumerate() {
+            let mut k = [c[0], c[1], c[2]];
+            k.sort_unstable();
+            if k[0] == k[1] || k[1] == k[2] {
+                degenerate += 1;
+            } else if let std::collections::btree_map::Entry::Vacant(e) = first.entry(k) {
+                e.insert(t as u32);
+            } else {
+                duplicates += 1;
+            }
+        }
+        assert_eq!(r.stats.degenerate_triangles, degenerate);
+        assert_eq!(r.stats.duplicate_triangles, duplicates);
+        let mut kept = r.triangle_map.clone();
+        kept.sort_unstable();
+        let mut want: Vec<u32> = first.into_values().collect();
+        want.sort_unstable();
+        assert_eq!(kept, want);
+        for (tri, &t) in r.mesh.triangles.iter().zip(&r.triangle_map) {
+            let input = [0, 1, 2].map(|k| r.vertex_map[idx[3 * t as usize + k] as usize]);
+            assert_eq!(*tri, input, "input triangle {t}: corners and winding kept");
+        }
+        let lowest: Vec<u32> = r
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| t[0].min(t[1]).min(t[2]))
+            .collect();
+        assert!(lowest.windows(2).all(|w| w[0] <= w[1]));
     }
 
     #[test]
