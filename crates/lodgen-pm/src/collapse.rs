@@ -1409,20 +1409,47 @@ fn classify_vertex(
     boundary_weight: f64,
 ) -> VertexInfo {
     let mut quadric = Quadric::default();
+    for &t in ts {
+        let [nx, ny, nz, d, w] = planes[t as usize];
+        if w > 0.0 {
+            quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
+        }
+    }
+    // each triangle's two other corners, in winding order: the edge to the
+    // first leaves v, the edge from the second enters it
+    let others = |t: u32| {
+        let [a, b, c] = mesh.triangles[t as usize];
+        if a == v {
+            (b, c)
+        } else if b == v {
+            (c, a)
+        } else {
+            (a, b)
+        }
+    };
+    if ts.len() <= DISK_MAX {
+        let (mut leave, mut enter) = ([u32::MAX; DISK_MAX], [u32::MAX; DISK_MAX]);
+        for (i, &t) in ts.iter().enumerate() {
+            (leave[i], enter[i]) = others(t);
+        }
+        if closed_disk(&leave, &enter, ts.len()) {
+            // the usual interior vertex: no border, one fan
+            return VertexInfo {
+                quadric,
+                boundary: false,
+                locked: false,
+            };
+        }
+    }
     // neighbour << 32 | (1 = edge leaves v) << 31 | fan slot: one integer
     // per use sorts as the tuple (neighbour, direction, slot) would
     let mut uses: SmallVec<[u64; 32]> = SmallVec::new();
     let edge_use =
         |x: u32, leaves: u64, slot: usize| u64::from(x) << 32 | leaves << 31 | slot as u64;
     for (i, &t) in ts.iter().enumerate() {
-        let tri = mesh.triangles[t as usize];
-        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-        uses.push(edge_use(tri[(k + 1) % 3], 1, i));
-        uses.push(edge_use(tri[(k + 2) % 3], 0, i));
-        let [nx, ny, nz, d, w] = planes[t as usize];
-        if w > 0.0 {
-            quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
-        }
+        let (l, e) = others(t);
+        uses.push(edge_use(l, 1, i));
+        uses.push(edge_use(e, 0, i));
     }
     uses.sort_unstable();
     let mut parent: SmallVec<[u32; 16]> = (0..ts.len() as u32).collect();
@@ -1486,6 +1513,51 @@ fn classify_vertex(
         boundary,
         locked,
     }
+}
+
+/// Fans up to this size are tried with [`closed_disk`] first.
+const DISK_MAX: usize = 16;
+
+/// Whether the first `d` triangles of a fan, triangle `i` leaving `v`
+/// towards `leave[i]` and entering it from `enter[i]` (the rest of both
+/// arrays `u32::MAX`), make one closed disk: each neighbour left once and
+/// entered once (so every edge is interior), and "the triangle entering
+/// from where triangle `i` leaves to" is one cycle through all `d` (one
+/// fan). The general path of `classify_vertex` (sorting the edge uses)
+/// gives the same answer; this is the quick one for the usual vertex, and
+/// `false` leaves the vertex to the general path.
+fn closed_disk(leave: &[u32; DISK_MAX], enter: &[u32; DISK_MAX], d: usize) -> bool {
+    if d < 2 {
+        return false;
+    }
+    // next[i]: the (sum of the) triangles entering from leave[i], and how
+    // many there are; without branches, so that it vectorises
+    let mut next = [0u32; DISK_MAX];
+    let mut single = true;
+    for i in 0..d {
+        let (mut count, mut at) = (0u32, 0u32);
+        for (j, &e) in enter.iter().enumerate() {
+            let hit = u32::from(e == leave[i]);
+            count += hit;
+            at += hit * j as u32;
+        }
+        single &= count == 1;
+        next[i] = at;
+    }
+    if !single {
+        return false;
+    }
+    // one entering triangle each: `next` is a function on 0..d, and a
+    // cycle through all d from 0 makes it a bijection (leaves distinct,
+    // and with one match each, enters distinct too)
+    let mut i = 0;
+    for _ in 1..d {
+        i = next[i] as usize;
+        if i == 0 {
+            return false;
+        }
+    }
+    next[i] == 0
 }
 
 /// A face's plane `[n.x, n.y, n.z, d, weight]` (unit normal, `n·x + d =
@@ -1722,4 +1794,89 @@ pub(crate) fn prefetch<T>(x: &T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = x;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A fan around vertex 0 as `(leave, enter)` per triangle: kind 0 a
+    /// closed disk, 1 two disks on distinct neighbours, 2 a disk with one
+    /// triangle turned over, 3 an open fan (a border), 4 random corners
+    /// from a few neighbours; then shuffled.
+    fn fan(kind: u8, d: usize, seed: u64) -> Vec<(u32, u32)> {
+        let mut rng = seed | 1;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let ring = |n: usize, base: u32| -> Vec<(u32, u32)> {
+            (0..n as u32)
+                .map(|i| (base + i, base + (i + 1) % n as u32))
+                .collect()
+        };
+        let mut f = match kind {
+            0 => ring(d, 1),
+            1 => [ring(d.max(4) / 2, 1), ring(d.max(4) - d.max(4) / 2, 100)].concat(),
+            2 => {
+                let mut f = ring(d, 1);
+                let (l, e) = f[0];
+                f[0] = (e, l);
+                f
+            }
+            3 => ring(d + 1, 1)[..d].to_vec(),
+            _ => (0..d)
+                .map(|_| {
+                    let l = 1 + (next() % 5) as u32;
+                    (l, 1 + (l + (next() % 4) as u32) % 5)
+                })
+                .collect(),
+        };
+        for i in (1..f.len()).rev() {
+            f.swap(i, (next() % (i as u64 + 1)) as usize);
+        }
+        f
+    }
+
+    /// What a closed disk is, by counting: every neighbour left once and
+    /// entered once, and the triangles joined across shared edges are one
+    /// component.
+    fn is_closed_disk(f: &[(u32, u32)]) -> bool {
+        let n = |x: u32, side: fn(&(u32, u32)) -> u32| f.iter().filter(|t| side(t) == x).count();
+        let edges_ok = f.iter().all(|&(l, e)| {
+            n(l, |t| t.0) == 1 && n(l, |t| t.1) == 1 && n(e, |t| t.0) == 1 && n(e, |t| t.1) == 1
+        });
+        let mut comp: Vec<usize> = (0..f.len()).collect();
+        for _ in 0..f.len() {
+            for i in 0..f.len() {
+                for j in 0..f.len() {
+                    if f[i].0 == f[j].1 {
+                        let m = comp[i].min(comp[j]);
+                        (comp[i], comp[j]) = (m, m);
+                    }
+                }
+            }
+        }
+        edges_ok && f.len() >= 2 && comp.iter().all(|&c| c == 0)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// `closed_disk` is the quick path of `classify_vertex`: it must say
+        /// "closed disk" exactly when the fan is one.
+        #[test]
+        fn closed_disk_is_exactly_a_closed_disk(kind in 0u8..5, d in 1usize..=DISK_MAX, seed in any::<u64>()) {
+            let f = fan(kind, d, seed);
+            prop_assume!(f.len() <= DISK_MAX);
+            let (mut leave, mut enter) = ([u32::MAX; DISK_MAX], [u32::MAX; DISK_MAX]);
+            for (i, &(l, e)) in f.iter().enumerate() {
+                (leave[i], enter[i]) = (l, e);
+            }
+            prop_assert_eq!(closed_disk(&leave, &enter, f.len()), is_closed_disk(&f), "{:?}", f);
+        }
+    }
 }
