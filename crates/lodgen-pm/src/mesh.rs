@@ -379,10 +379,10 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         let k = keys[ti as usize];
         u64::from(k[1]) << 32 | u64::from(k[2])
     };
-    let kept: Vec<(Vec<[u32; 3]>, Vec<u32>, usize)> = runs
+    let kept: Vec<(Vec<u32>, usize)> = runs
         .into_par_iter()
         .map(|(lo, hi, run)| {
-            let (mut kept, mut map, mut duplicates) = (Vec::new(), Vec::new(), 0);
+            let (mut kept, mut duplicates) = (Vec::new(), 0);
             let base = start[lo];
             for v in lo..hi {
                 let g = &mut run[(start[v] - base) as usize..(start[v + 1] - base) as usize];
@@ -396,22 +396,24 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
                         duplicates += 1;
                     } else {
                         last = Some(k);
-                        kept.push(tris[ti as usize]);
-                        map.push(ti);
+                        kept.push(ti);
                     }
                 }
             }
-            (kept, map, duplicates)
+            (kept, duplicates)
         })
         .collect();
-    let mut triangles = Vec::with_capacity(group.len());
-    let mut triangle_map = Vec::with_capacity(group.len());
-    for (t, m, d) in kept {
-        triangles.extend_from_slice(&t);
-        triangle_map.extend_from_slice(&m);
+    // (the keys and groups freed first: peak memory)
+    drop((group, start, keys));
+    let count = kept.iter().map(|k| k.0.len()).sum();
+    let mut triangles = Vec::with_capacity(count);
+    let mut triangle_map = Vec::with_capacity(count);
+    for (map, d) in kept {
+        triangles.extend(map.iter().map(|&ti| tris[ti as usize]));
+        triangle_map.extend_from_slice(&map);
         stats.duplicate_triangles += d;
     }
-    drop((group, start, tris, keys));
+    drop(tris);
     for i in 0..positions.len() {
         let c = canonical[i] as usize;
         vertex_map[i] = vertex_map[c];
