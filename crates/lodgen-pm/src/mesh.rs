@@ -333,9 +333,10 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
                 return [NONE; 3];
             }
             *t = t.map(|c| vertex_map[c as usize]);
-            let mut k = *t;
-            k.sort_unstable();
-            k
+            // sorted by a min / max network (branch-free)
+            let [a, b, c] = *t;
+            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            [lo, a ^ b ^ c ^ lo ^ hi, hi]
         })
         .collect();
     let nv = welded_positions.len();
