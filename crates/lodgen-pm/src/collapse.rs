@@ -1034,6 +1034,8 @@ impl Simplifier {
     /// Pass boundaries and candidates beyond the sorted part go through
     /// `step_pass` itself.
     fn walk_batch(&mut self, factor: f32) -> Result<(), StopReason> {
+        /// On a batch index: the pair is planned in order only.
+        const LATER: u32 = 1 << 31;
         /// At most this many pairs are planned at once (the batch is one
         /// pair per 64 live triangles: enough to amortise the fork, few
         /// enough that a plan is rarely invalidated).
@@ -1053,10 +1055,20 @@ impl Simplifier {
         let mut batch = std::mem::take(&mut self.scratch);
         batch.clear();
         let mut scan = pass.cursor;
+        // A pair sharing a vertex with an earlier pair of the batch is
+        // nearly always skipped (that vertex is touched once the earlier
+        // pair contracts): it is not planned ahead (`LATER` on its index),
+        // only in order, in the rare case it is still wanted then.
+        let claim = self.next_generation();
+        let (pass, mark) = (&self.pass, &mut self.mark);
         while scan < end && batch.len() < want {
             let e = pass.queue[scan];
-            if pass.touched[e.a as usize] != n && pass.touched[e.b as usize] != n {
-                batch.push(scan as u32);
+            let (a, b) = (e.a as usize, e.b as usize);
+            if pass.touched[a] != n && pass.touched[b] != n {
+                let later = mark[a] == claim || mark[b] == claim;
+                (mark[a], mark[b]) = (claim, claim);
+                debug_assert!(scan < LATER as usize);
+                batch.push(scan as u32 | if later { LATER } else { 0 });
             }
             scan += 1;
         }
@@ -1067,9 +1079,10 @@ impl Simplifier {
         // prefetches ahead: the vertex data of the pair four on, the fan
         // lists of the pair two on, the triangles of the next pair.
         let pair = |k: usize| {
-            let e = this.pass.queue[batch[k] as usize];
+            let e = this.pass.queue[(batch[k] & !LATER) as usize];
             (e.a, e.b)
         };
+        let ahead = |k: usize| batch[k] & LATER == 0;
         let mut plans: Vec<Option<Result<Plan, Rejected>>> = batch
             .par_chunks(32)
             .enumerate()
@@ -1077,28 +1090,30 @@ impl Simplifier {
                 let (base, end) = (c * 32, c * 32 + chunk.len());
                 let mut out = Vec::with_capacity(chunk.len());
                 for k in base..end {
-                    if k + 4 < end {
+                    if k + 4 < end && ahead(k + 4) {
                         let (a, b) = pair(k + 4);
                         this.prefetch_vertices(a, b);
                     }
-                    if k + 2 < end {
+                    if k + 2 < end && ahead(k + 2) {
                         let (a, b) = pair(k + 2);
                         this.vtris.prefetch_fan(a);
                         this.vtris.prefetch_fan(b);
                     }
-                    if k + 1 < end {
+                    if k + 1 < end && ahead(k + 1) {
                         let (a, b) = pair(k + 1);
                         this.prefetch_triangles(a);
                         this.prefetch_triangles(b);
                     }
-                    let (a, b) = pair(k);
-                    out.push(Some(this.plan(a, b)));
+                    out.push(ahead(k).then(|| {
+                        let (a, b) = pair(k);
+                        this.plan(a, b)
+                    }));
                 }
                 out
             })
             .collect();
         let g = self.next_generation();
-        for (k, &i) in batch.iter().enumerate() {
+        for (k, i) in batch.iter().map(|&i| i & !LATER).enumerate() {
             // (prefetching for the contractions ahead, as for the plans:
             // what `contract` reads of the pair three on, and the fans and
             // triangles of the next)
@@ -1126,10 +1141,10 @@ impl Simplifier {
             if pass.touched[e.a as usize] == n || pass.touched[e.b as usize] == n {
                 continue;
             }
-            let plan = if self.mark[e.a as usize] == g || self.mark[e.b as usize] == g {
-                self.plan(e.a, e.b)
-            } else {
-                plans[k].take().expect("each plan is used once")
+            let plan = match plans[k].take() {
+                Some(plan) if self.mark[e.a as usize] != g && self.mark[e.b as usize] != g => plan,
+                // changed since it was planned, or not planned ahead
+                _ => self.plan(e.a, e.b),
             };
             match plan {
                 Ok(plan) => {
