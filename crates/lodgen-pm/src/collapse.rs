@@ -1,6 +1,6 @@
 //! The contraction loop (GH97 §3–4): per-vertex quadrics, candidate pairs in
 //! a heap keyed on cost, legality checks, contraction, and one
-//! [`Contraction`] record per step for the vertex-split log.
+//! `Contraction` record per step for the vertex-split log.
 //!
 //! Owns [`Simplifier`], [`Stats`], [`Rejections`], [`StopReason`]. Pair
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final

@@ -29,9 +29,9 @@
 //! restores every corner's wedge exactly.
 //!
 //! Attribute error: Hoppe 1999 attribute quadrics per wedge, in
-//! `attrquadric` (re-exported here as [`AttributeCost`]).
+//! `attrquadric` (re-exported here as `AttributeCost`).
 //!
-//! Owns [`Features`] and [`Kind`]. The contraction rules
+//! Owns `Features` and [`Kind`]. The contraction rules
 //! that consult them are in `collapse` (`target_of`, `check`, `contract`,
 //! `entry`).
 

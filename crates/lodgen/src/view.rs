@@ -282,7 +282,7 @@ impl ViewData {
     }
 }
 
-/// A bound server; [`ViewServer::run`] answers until [`ViewServer::stop`].
+/// A bound server; [`ViewServer::run`] answers until [`Stopper::stop`] (from [`ViewServer::stopper`]).
 pub struct ViewServer {
     server: Arc<Server>,
     data: Arc<ViewData>,
