@@ -219,6 +219,8 @@ pub struct Simplifier {
     generation: u32,
     scratch: Vec<u32>,
     fan_scratch: Vec<u32>,
+    /// The batched walk's plans (reused from batch to batch).
+    plan_scratch: Vec<Option<Result<Plan, Rejected>>>,
     /// Optional per-vertex multiplier of pair costs (curvature-weighted
     /// modes): a pair costs `cost × max(scale[a], scale[b])`.
     cost_scale: Option<Vec<f32>>,
@@ -395,6 +397,7 @@ impl Simplifier {
             generation: 0,
             scratch: Vec::new(),
             fan_scratch: Vec::new(),
+            plan_scratch: Vec::new(),
             cost_scale: None,
             features: None,
             attributes: None,
@@ -1072,6 +1075,7 @@ impl Simplifier {
             }
             scan += 1;
         }
+        let mut plans = std::mem::take(&mut self.plan_scratch);
         let this = &*self;
         // Plans wait on memory: the pairs are in cost order, so each one's
         // neighbourhood is cold, and its fan → triangle → vertex loads
@@ -1083,35 +1087,33 @@ impl Simplifier {
             (e.a, e.b)
         };
         let ahead = |k: usize| batch[k] & LATER == 0;
-        let mut plans: Vec<Option<Result<Plan, Rejected>>> = batch
-            .par_chunks(32)
-            .enumerate()
-            .flat_map_iter(|(c, chunk)| {
-                let (base, end) = (c * 32, c * 32 + chunk.len());
-                let mut out = Vec::with_capacity(chunk.len());
-                for k in base..end {
-                    if k + 4 < end && ahead(k + 4) {
-                        let (a, b) = pair(k + 4);
-                        this.prefetch_vertices(a, b);
-                    }
-                    if k + 2 < end && ahead(k + 2) {
-                        let (a, b) = pair(k + 2);
-                        this.vtris.prefetch_fan(a);
-                        this.vtris.prefetch_fan(b);
-                    }
-                    if k + 1 < end && ahead(k + 1) {
-                        let (a, b) = pair(k + 1);
-                        this.prefetch_triangles(a);
-                        this.prefetch_triangles(b);
-                    }
-                    out.push(ahead(k).then(|| {
-                        let (a, b) = pair(k);
-                        this.plan(a, b)
-                    }));
+        // (each thread takes runs of at least 32 pairs, in order; the plans
+        // are written in place into the vector of the last batch)
+        let len = batch.len();
+        (0..len)
+            .into_par_iter()
+            .with_min_len(32)
+            .map(|k| {
+                if k + 4 < len && ahead(k + 4) {
+                    let (a, b) = pair(k + 4);
+                    this.prefetch_vertices(a, b);
                 }
-                out
+                if k + 2 < len && ahead(k + 2) {
+                    let (a, b) = pair(k + 2);
+                    this.vtris.prefetch_fan(a);
+                    this.vtris.prefetch_fan(b);
+                }
+                if k + 1 < len && ahead(k + 1) {
+                    let (a, b) = pair(k + 1);
+                    this.prefetch_triangles(a);
+                    this.prefetch_triangles(b);
+                }
+                ahead(k).then(|| {
+                    let (a, b) = pair(k);
+                    this.plan(a, b)
+                })
             })
-            .collect();
+            .collect_into_vec(&mut plans);
         let g = self.next_generation();
         for (k, i) in batch.iter().map(|&i| i & !LATER).enumerate() {
             // (prefetching for the contractions ahead, as for the plans:
@@ -1128,6 +1130,7 @@ impl Simplifier {
             if self.live_tris <= self.target {
                 self.pass.cursor = i as usize;
                 self.scratch = batch;
+                self.plan_scratch = plans;
                 return Err(StopReason::Target);
             }
             let pass = &mut self.pass;
@@ -1135,6 +1138,7 @@ impl Simplifier {
             if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
                 pass.cursor = pass.queue.len();
                 self.scratch = batch;
+                self.plan_scratch = plans;
                 return Ok(());
             }
             pass.cursor = i as usize + 1;
@@ -1169,6 +1173,7 @@ impl Simplifier {
         // the rest of the scanned range was touched: skipped, as step_pass would
         self.pass.cursor = self.pass.cursor.max(scan);
         self.scratch = batch;
+        self.plan_scratch = plans;
         Ok(())
     }
 
