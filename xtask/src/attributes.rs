@@ -7,16 +7,16 @@
 //! each sample, the nearest point of the simplified mesh; UV error is the UV
 //! distance between the two points' interpolated UVs, normal error the angle
 //! between their interpolated normals. Geometric error (symmetric
-//! Hausdorff / RMS, % of the bbox diagonal) from `lodgen_pm::measure`.
+//! Hausdorff / RMS, % of the bbox diagonal) from `lodgen_pm::metric`.
 //! A benchmark, not a test: it prints a table.
 
 use anyhow::{Context, Result};
 use lodgen::lod::{build_one, BuildOptions, LevelRequest};
 use lodgen::scene::{Primitive, SourceMesh};
 use lodgen_pm::attrfit::barycentric;
-use lodgen_pm::bvh::TriangleBvh;
 use lodgen_pm::levels::LevelSpec;
-use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
+use lodgen_pm::metric::bvh::TriangleBvh;
+use lodgen_pm::metric::{measure, MeasureOptions, MeshRef};
 
 /// Samples on the original surface: enough for the mean to settle to ~1 %.
 const SAMPLES: usize = 50_000;

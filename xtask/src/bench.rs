@@ -16,10 +16,10 @@
 //! down to 2 % that yields all three levels (vertex-split log and level
 //! extraction included); meshopt's is its single call to 2 % (its 50 % and
 //! 10 % levels are separate calls, timed too). Errors use lodgen's metric
-//! (`lodgen_pm::measure`, symmetric, % of the bbox diagonal) on both.
+//! (`lodgen_pm::metric`, symmetric, % of the bbox diagonal) on both.
 
 use anyhow::{bail, Context, Result};
-use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{measure, MeasureOptions, MeshRef};
 use lodgen_pm::shapes::subdivide;
 use lodgen_pm::{simplify, Mesh, SimplifyOptions};
 use serde_json::{json, Value};

@@ -1,12 +1,12 @@
-//! Times `lodgen_pm::measure::measure` on the bunny against a crude ~1.4k-triangle copy made by
+//! Times `lodgen_pm::metric::measure` on the bunny against a crude ~1.4k-triangle copy made by
 //! vertex clustering (Rossignac–Borrel), the size of a 2% level.
 //!
 //! `cargo run --release -p lodgen-pm --example measure_bunny [path/to/bunny.obj] [runs] [cells] [densities]`
 
 use std::time::Instant;
 
-use lodgen_pm::bvh::TriangleBvh;
-use lodgen_pm::measure::{measure, one_sided, MeasureOptions, MeshRef};
+use lodgen_pm::metric::bvh::TriangleBvh;
+use lodgen_pm::metric::{measure, one_sided, MeasureOptions, MeshRef};
 use lodgen_pm::Mesh;
 
 #[path = "common/mod.rs"]

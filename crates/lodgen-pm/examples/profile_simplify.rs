@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use lodgen_pm::measure::{measure, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{measure, MeasureOptions, MeshRef};
 use lodgen_pm::{prepare, Schedule, Simplifier, SimplifyOptions};
 
 #[path = "common/mod.rs"]

@@ -21,39 +21,30 @@
 //! flow: mesh → quadrics → pairs → heap → collapse → vertex-split log →
 //! levels.
 
-mod adjacency;
-pub mod attrfit;
-mod attrquadric;
-pub mod bvh;
-pub mod collapse;
-pub mod curvature;
-pub mod features;
-pub mod heap;
-pub mod levels;
-pub mod measure;
+pub mod adaptive;
 pub mod mesh;
-pub mod options;
-pub mod pairs;
-pub mod quadric;
+pub mod metric;
+pub mod progressive;
 pub mod shapes;
-pub mod stream;
-pub mod vsplit;
+pub mod simplify;
+mod util;
 
-pub use collapse::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
-pub use curvature::{
+pub use adaptive::{
     simplify_adaptive, simplify_method, Adaptive, AdaptiveOptions, AdaptiveReport, AdaptiveStop,
     Method, Reclassify, Threshold,
 };
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
-pub use options::{
+pub use progressive::{attrfit, levels, stream};
+pub use progressive::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
+pub use simplify::options::{
     Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
     DEFAULT_PASS_FACTOR,
 };
-pub use vsplit::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
+pub use simplify::{Rejected, Rejections, Simplifier, Snapshot, Stats, StopReason};
 
 /// A simplification's result: the progressive mesh (numbered as in
-/// [`vsplit`]), what preparation removed, what the loop did, and why it
+/// [`progressive`]), what preparation removed, what the loop did, and why it
 /// stopped.
 #[derive(Clone, Debug)]
 pub struct Simplified {
@@ -88,12 +79,12 @@ pub fn simplify(
     })
 }
 
-/// [`simplify`], with attributes kept apart by wedges: `indices` refer to
+/// [`simplify()`], with attributes kept apart by wedges: `indices` refer to
 /// unwelded vertices, and two corners share a wedge exactly when they share
 /// an index. Positions are welded for topology; every edge across which the
 /// indices differ (a UV seam, a hard edge, a material border when the
 /// caller numbers primitives apart) is a feature edge that collapses only
-/// along itself (see [`features`]). The log carries every corner's wedge
+/// along itself (see [`simplify::features`]). The log carries every corner's wedge
 /// (`pm.wedges`, input vertex indices), so replay restores them exactly.
 ///
 /// `attributes` holds `dims` weighted values per input vertex, i.e. per

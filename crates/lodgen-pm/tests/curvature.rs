@@ -2,7 +2,7 @@
 //! paper states about its operators, the border rule, the classification,
 //! and the vertex-split log's replay invariant for every method.
 
-use lodgen_pm::curvature::{
+use lodgen_pm::adaptive::{
     boundary_vertices, classify, normal_deviation, threshold_value, Repairs,
 };
 use lodgen_pm::shapes::{cube, grid, torus_knot};

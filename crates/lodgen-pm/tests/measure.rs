@@ -1,9 +1,9 @@
-//! Tests of the error metric (`lodgen_pm::measure`) and its closest-point hierarchy
-//! (`lodgen_pm::bvh`): exact cases worked out by hand, the hierarchy against brute force, and
+//! Tests of the error metric (`lodgen_pm::metric`) and its closest-point hierarchy
+//! (`lodgen_pm::metric::bvh`): exact cases worked out by hand, the hierarchy against brute force, and
 //! determinism.
 
-use lodgen_pm::bvh::{closest_point_on_triangle, distance_squared, TriangleBvh};
-use lodgen_pm::measure::{
+use lodgen_pm::metric::bvh::{closest_point_on_triangle, distance_squared, TriangleBvh};
+use lodgen_pm::metric::{
     measure, one_sided, Distance, MeasureError, MeasureOptions, MeshError, MeshRef,
 };
 use proptest::prelude::*;

@@ -4,9 +4,9 @@
 //! levels), face counts never rise while simplifying, the grid pair finder
 //! equals brute force, and replay is exact.
 
-use lodgen_pm::collapse::FLIP_MIN_COS;
-use lodgen_pm::pairs::{edges, near_pairs, near_pairs_brute_force};
 use lodgen_pm::shapes::{grid, icosphere, torus};
+use lodgen_pm::simplify::pairs::{edges, near_pairs, near_pairs_brute_force};
+use lodgen_pm::simplify::FLIP_MIN_COS;
 use lodgen_pm::{
     prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, Tau,
 };

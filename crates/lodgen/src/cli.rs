@@ -13,7 +13,7 @@ use crate::scene::{Origin, Scene};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use lodgen_pm::levels::LevelSpec;
-use lodgen_pm::measure::{self, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{self, MeasureOptions, MeshRef};
 use lodgen_pm::{Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -316,7 +316,7 @@ impl BuildArgs {
             .parse()
             .map_err(|e| anyhow::anyhow!("--method {:?}: {e:?}", self.method))?;
         let threshold = match self.curvature_threshold.trim() {
-            "sigma" => lodgen_pm::Threshold::Sigma(lodgen_pm::curvature::DEFAULT_SIGMA),
+            "sigma" => lodgen_pm::Threshold::Sigma(lodgen_pm::adaptive::DEFAULT_SIGMA),
             "median" => lodgen_pm::Threshold::Median,
             other => {
                 let f: f64 = other.parse().with_context(|| {
@@ -629,7 +629,7 @@ pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<
         Ok(merged_mesh(&scene))
     };
     let (ma, mb) = (read(a)?, read(b)?);
-    let r = measure::measure(
+    let r = metric::measure(
         MeshRef::new(&ma.positions, &ma.triangles),
         MeshRef::new(&mb.positions, &mb.triangles),
         &MeasureOptions::DEFAULT.with_samples_per_triangle(samples),

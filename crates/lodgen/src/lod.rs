@@ -17,7 +17,7 @@
 //! positions for topology and treats every edge across which wedges differ
 //! — UV seams, hard normals, colour or skin discontinuities, material
 //! borders — as a feature edge that collapses only along itself
-//! (`lodgen_pm::features`); the cost adds attribute quadrics per wedge
+//! (`lodgen_pm::simplify::features`); the cost adds attribute quadrics per wedge
 //! (`AttributeWeights`). The log tracks each corner's wedge, and a level's
 //! corner starts from the attributes of its wedge (a source vertex of the
 //! same chart): JOINTS / WEIGHTS of every set stay those of that one vertex
@@ -30,7 +30,7 @@
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
-use lodgen_pm::measure::{self, ErrorReport, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{self, ErrorReport, MeasureOptions, MeshRef};
 use lodgen_pm::{
     simplify_adaptive, simplify_with_wedges, AdaptiveOptions, Mesh, MeshError, Method, Simplified,
     SimplifyOptions,
@@ -59,12 +59,12 @@ pub struct BuildOptions {
     /// Options of the curvature-adaptive methods.
     pub adaptive: AdaptiveOptions,
     pub measure: MeasureOptions,
-    /// Weights of the attribute term of the cost (`lodgen_pm::features`).
+    /// Weights of the attribute term of the cost (`lodgen_pm::simplify::features`).
     pub attribute_weights: AttributeWeights,
 }
 
 /// Weights of each attribute in the cost (Hoppe 1999 attribute quadrics,
-/// `lodgen_pm::features`): a difference of 1 in an attribute at weight 1
+/// `lodgen_pm::simplify::features`): a difference of 1 in an attribute at weight 1
 /// costs like a displacement by the bounding-box diagonal. 0 leaves an
 /// attribute out (its seams are still kept).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,7 +129,7 @@ pub enum BuildError {
     Measure {
         index: usize,
         name: String,
-        source: measure::MeasureError,
+        source: metric::MeasureError,
     },
     #[error("no levels requested")]
     NoLevels,
@@ -535,7 +535,7 @@ pub fn build_one(
     let diagonal = full.diagonal();
     let measure_at = |k: usize, mopts: &MeasureOptions| -> Result<ErrorReport, BuildError> {
         let m = pm.mesh_at_splits(k);
-        measure::measure(
+        metric::measure(
             MeshRef::new(&full.positions, &full.triangles),
             MeshRef::new(&m.positions, &m.triangles),
             mopts,
@@ -600,7 +600,7 @@ pub fn build_one(
         });
         cursor.seek(k);
         let m = cursor.mesh();
-        let report = measure::measure(
+        let report = metric::measure(
             MeshRef::new(&full.positions, &full.triangles),
             MeshRef::new(&m.positions, &m.triangles),
             &opts.measure,

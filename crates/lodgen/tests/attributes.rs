@@ -337,8 +337,8 @@ fn bumpy_field() -> SourceMesh {
 /// interpolated attributes at points sampled on it and the level's at the
 /// nearest point of the level (what `cargo xtask attributes` measures).
 fn attribute_error(input: &Primitive, level: &[Primitive]) -> (f64, f64) {
-    use lodgen_pm::bvh::TriangleBvh;
-    use lodgen_pm::measure::MeshRef;
+    use lodgen_pm::metric::bvh::TriangleBvh;
+    use lodgen_pm::metric::MeshRef;
     let (mut pos, mut nrm, mut uv, mut tris) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for p in level {
         let off = pos.len() as u32;

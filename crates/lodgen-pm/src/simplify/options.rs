@@ -58,7 +58,7 @@ pub enum Tau {
     DiagonalFraction(f64),
 }
 
-/// Options of [`crate::simplify`]. Stopping: whichever target is reached
+/// Options of [`crate::simplify()`]. Stopping: whichever target is reached
 /// first.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]

@@ -5,6 +5,8 @@
 //!
 //! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
 
+pub(crate) mod adjacency;
+
 use rayon::prelude::*;
 use thiserror::Error;
 

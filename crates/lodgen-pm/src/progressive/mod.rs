@@ -12,8 +12,12 @@
 //! Owns [`VertexSplit`], [`ProgressiveMesh`], [`Cursor`] and the conversion
 //! from the simplifier's contraction log. No simplification logic here.
 
-use crate::collapse::prefetch;
+pub mod attrfit;
+pub mod levels;
+pub mod stream;
+
 use crate::mesh::Mesh;
+use crate::util::prefetch;
 use rayon::prelude::*;
 use smallvec::SmallVec;
 

@@ -35,8 +35,8 @@
 //! that consult them are in `collapse` (`target_of`, `check`, `contract`,
 //! `entry`).
 
-pub(crate) use crate::attrquadric::AttributeCost;
-use crate::collapse::Rejected;
+pub(crate) use crate::simplify::attrquadric::AttributeCost;
+use crate::simplify::Rejected;
 use smallvec::SmallVec;
 
 /// How a vertex may move, from its feature-edge count (module table).

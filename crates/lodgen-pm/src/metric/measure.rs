@@ -3,7 +3,7 @@
 //! This module owns surface sampling, the one-sided and symmetric distance statistics
 //! (Hausdorff, mean, RMS) and their expression as a percentage of the original's bounding-box
 //! diagonal. It takes meshes as plain slices ([`MeshRef`]) so it depends on nothing else in the
-//! core; closest-point queries are [`crate::bvh::TriangleBvh`]'s.
+//! core; closest-point queries are [`crate::metric::bvh::TriangleBvh`]'s.
 //!
 //! Method (after Metro: P. Cignoni, C. Rocchini, R. Scopigno, "Metro: measuring error on
 //! simplified surfaces", Computer Graphics Forum 17(2), 1998): the one-sided distance from
@@ -27,29 +27,8 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
-use crate::bvh::TriangleBvh;
-
-/// A triangle mesh seen as plain slices. Triangles are triples of indices into `positions`;
-/// vertices no triangle refers to are ignored.
-#[derive(Clone, Copy, Debug)]
-pub struct MeshRef<'a> {
-    pub positions: &'a [[f32; 3]],
-    pub triangles: &'a [[u32; 3]],
-}
-
-/// What is wrong with a mesh given to the metric.
-#[derive(Clone, Debug, PartialEq, Eq, Error)]
-#[non_exhaustive]
-pub enum MeshError {
-    #[error("triangle {triangle} refers to vertex {index}, but there are {vertex_count} vertices")]
-    IndexOutOfRange {
-        triangle: usize,
-        index: u32,
-        vertex_count: usize,
-    },
-    #[error("triangle {triangle} uses vertex {vertex}, whose position is not finite")]
-    NonFinite { triangle: usize, vertex: u32 },
-}
+use crate::metric::bvh::TriangleBvh;
+use crate::metric::{MeshError, MeshRef};
 
 /// [`measure`]'s error: which mesh is invalid and why.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
@@ -59,62 +38,6 @@ pub enum MeasureError {
     A(MeshError),
     #[error("mesh B: {0}")]
     B(MeshError),
-}
-
-impl<'a> MeshRef<'a> {
-    pub fn new(positions: &'a [[f32; 3]], triangles: &'a [[u32; 3]]) -> Self {
-        MeshRef {
-            positions,
-            triangles,
-        }
-    }
-
-    /// Checks that every index is in range and every used position is finite.
-    ///
-    /// # Errors
-    /// The first offending triangle, in triangle order.
-    pub fn validate(&self) -> Result<(), MeshError> {
-        let vertex_count = self.positions.len();
-        for (triangle, t) in self.triangles.iter().enumerate() {
-            for &index in t {
-                let Some(p) = self.positions.get(index as usize) else {
-                    return Err(MeshError::IndexOutOfRange {
-                        triangle,
-                        index,
-                        vertex_count,
-                    });
-                };
-                if !p.iter().all(|c| c.is_finite()) {
-                    return Err(MeshError::NonFinite {
-                        triangle,
-                        vertex: index,
-                    });
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Diagonal of the bounding box of the vertices the triangles use; 0 without triangles.
-    pub fn bbox_diagonal(&self) -> f64 {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for t in self.triangles {
-            for &v in t {
-                let Some(p) = self.positions.get(v as usize) else {
-                    continue;
-                };
-                for k in 0..3 {
-                    lo[k] = lo[k].min(f64::from(p[k]));
-                    hi[k] = hi[k].max(f64::from(p[k]));
-                }
-            }
-        }
-        if lo[0] > hi[0] {
-            return 0.0;
-        }
-        (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt()
-    }
 }
 
 /// Options of the metric.

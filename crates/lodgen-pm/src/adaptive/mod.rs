@@ -29,7 +29,7 @@
 //!    ([`AdaptiveStop`] says why).
 //!
 //! Algorithm 5's defects are *prevented* by the core's legality rules
-//! (link condition, [`FLIP_MIN_COS`](crate::collapse::FLIP_MIN_COS) flip test, [`DEGENERATE_AREA_RATIO_SQ`](crate::collapse::DEGENERATE_AREA_RATIO_SQ),
+//! (link condition, [`FLIP_MIN_COS`](crate::simplify::FLIP_MIN_COS) flip test, [`DEGENERATE_AREA_RATIO_SQ`](crate::simplify::DEGENERATE_AREA_RATIO_SQ),
 //! duplicate-triangle test), counted in [`AdaptiveReport::prevented`]. What
 //! still occurs after a legal operation (two triangles on the same three
 //! vertices — the paper's "spikes"; a valence-3 "pyramid" whose one face turns
@@ -63,14 +63,14 @@
 //! Owns [`Method`], [`AdaptiveOptions`], the classification and the sweep
 //! engine. Does no I/O and never prints.
 
-use crate::collapse::{
+use crate::mesh::{prepare, Mesh, MeshError};
+use crate::progressive::{Contraction, Corner, Log, ProgressiveMesh, Removed};
+use crate::simplify::options::SimplifyOptions;
+use crate::simplify::quadric::Quadric;
+use crate::simplify::{
     fan_count, link, moved_faces_ok, Faces, Link, PhaseTimes, Rejected, Rejections, Simplifier,
     Stats, StopReason,
 };
-use crate::mesh::{prepare, Mesh, MeshError};
-use crate::options::SimplifyOptions;
-use crate::quadric::Quadric;
-use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh, Removed};
 use crate::Simplified;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -102,7 +102,7 @@ pub const REVERSED_MAX_COS: f64 = 0.0;
 /// Which simplification method to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Method {
-    /// The core GH97 quadric pair contraction ([`crate::simplify`]).
+    /// The core GH97 quadric pair contraction ([`crate::simplify()`]).
     Qem,
     /// Curvature-adaptive full edge collapse to the midpoint (§2.2.1).
     Edge,
@@ -307,7 +307,7 @@ pub struct AdaptiveReport {
 }
 
 /// A method's result: the core [`Simplified`] (same shape as
-/// [`crate::simplify`]'s) and the curvature report.
+/// [`crate::simplify()`]'s) and the curvature report.
 #[derive(Clone, Debug)]
 pub struct Adaptive {
     pub simplified: Simplified,
@@ -516,7 +516,7 @@ pub fn classify(theta: &[f64], t: Threshold) -> (Vec<bool>, f64) {
     )
 }
 
-/// Prepare (as [`crate::simplify`] does) and run `method`. The triangle
+/// Prepare (as [`crate::simplify()`] does) and run `method`. The triangle
 /// target comes from `opts` (`target_triangles` / `target_ratio`); the QEM
 /// methods use all of `opts`, the adaptive ones only the target (their
 /// border rule is fixed: border vertices never move).
@@ -600,7 +600,7 @@ pub fn simplify_method(
 }
 
 /// [`simplify_method`] without the report: the same [`Simplified`] as
-/// [`crate::simplify`], so levels, glTF and streaming work unchanged.
+/// [`crate::simplify()`], so levels, glTF and streaming work unchanged.
 pub fn simplify_adaptive(
     positions: &[[f32; 3]],
     indices: &[u32],
@@ -878,8 +878,8 @@ impl Engine {
     }
 
     /// The core's legality rules, in its order: the edge must be interior
-    /// with two triangles, link condition, flip ([`FLIP_MIN_COS`](crate::collapse::FLIP_MIN_COS)) and
-    /// degeneracy ([`DEGENERATE_AREA_RATIO_SQ`](crate::collapse::DEGENERATE_AREA_RATIO_SQ)) of every moved triangle, no
+    /// with two triangles, link condition, flip ([`FLIP_MIN_COS`](crate::simplify::FLIP_MIN_COS)) and
+    /// degeneracy ([`DEGENERATE_AREA_RATIO_SQ`](crate::simplify::DEGENERATE_AREA_RATIO_SQ)) of every moved triangle, no
     /// moved triangle landing on an existing one.
     fn check(&mut self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
         let (i0, i1) = (v0 as usize, v1 as usize);

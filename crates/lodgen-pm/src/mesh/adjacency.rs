@@ -187,14 +187,14 @@ impl Fans {
     /// Prefetch `v`'s span (where its list is).
     #[inline]
     pub fn prefetch_span(&self, v: u32) {
-        crate::collapse::prefetch(&self.span[v as usize]);
+        crate::util::prefetch(&self.span[v as usize]);
     }
 
     /// Prefetch the start of `v`'s list (its span must be at hand).
     #[inline]
     pub fn prefetch_fan(&self, v: u32) {
         if let Some(t) = self.fan(v).first() {
-            crate::collapse::prefetch(t);
+            crate::util::prefetch(t);
         }
     }
 

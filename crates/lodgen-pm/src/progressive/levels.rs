@@ -1,7 +1,7 @@
 //! Choosing levels on the vertex-split log: by triangle count, ratio, or
 //! recorded error. Owns no geometry; measuring real error is `measure`'s job.
 
-use crate::vsplit::ProgressiveMesh;
+use crate::progressive::ProgressiveMesh;
 
 /// A requested level.
 #[derive(Clone, Copy, Debug, PartialEq)]

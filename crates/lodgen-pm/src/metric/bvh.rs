@@ -3,7 +3,7 @@
 //!
 //! This module owns [`TriangleBvh`] and [`closest_point_on_triangle`]. It reads a [`MeshRef`]
 //! once, copies the triangles into leaf order and never looks at the input again; it knows
-//! nothing about sampling or error statistics (that is [`crate::measure`]).
+//! nothing about sampling or error statistics (that is [`crate::metric::measure()`]).
 //!
 //! - Point–triangle distance: C. Ericson, *Real-Time Collision Detection*, Morgan Kaufmann
 //!   2005, §5.1.5 "Closest point on triangle to point" (Voronoi-region tests, no square roots),
@@ -17,7 +17,7 @@
 //! Bounds are stored as `f32`; since the input positions are `f32`, the min/max of a set of them
 //! is exact, so the boxes are tight and conservative. All distance arithmetic is `f64`.
 
-use crate::measure::{MeshError, MeshRef};
+use crate::metric::{MeshError, MeshRef};
 
 /// Triangles per leaf at most. Closest-point queries evaluate every triangle of a visited leaf,
 /// so leaves stay small; 4 is the usual sweet spot (one more box test costs about as much as

@@ -36,8 +36,8 @@
 //! result is a pure function of the input. Post-processing by attribute
 //! meaning (renormalising normals, …) is the caller's.
 
-use crate::bvh::TriangleBvh;
-use crate::measure::MeshRef;
+use crate::metric::bvh::TriangleBvh;
+use crate::metric::MeshRef;
 use rayon::prelude::*;
 use std::ops::Range;
 

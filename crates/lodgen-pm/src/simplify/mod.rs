@@ -6,14 +6,21 @@
 //! discovery is in `pairs`, the quadric maths in `quadric`, the log's final
 //! form in `vsplit`.
 
-use crate::adjacency::{FanLookup, Fans};
-use crate::features::{AttributeCost, Features};
-use crate::heap::{f32_order_key, Buckets, QuadHeap};
+pub mod attrquadric;
+pub mod features;
+pub mod heap;
+pub mod options;
+pub mod pairs;
+pub mod quadric;
+
+use crate::mesh::adjacency::{FanLookup, Fans};
 use crate::mesh::{Mesh, MeshError};
-use crate::options::{Boundary, Placement, Schedule, SimplifyOptions};
-use crate::pairs;
-use crate::quadric::{CostLanes, Quadric, LANES};
-use crate::vsplit::{Contraction, Corner, Log, ProgressiveMesh, Removed};
+use crate::progressive::{Contraction, Corner, Log, ProgressiveMesh, Removed};
+use crate::simplify::features::{AttributeCost, Features};
+use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
+use crate::simplify::options::{Boundary, Placement, Schedule, SimplifyOptions};
+use crate::simplify::quadric::{CostLanes, Quadric, LANES};
+use crate::util::{prefetch, with_marks};
 use glam::DVec3;
 use rayon::prelude::*;
 use smallvec::SmallVec;
@@ -575,7 +582,7 @@ impl Simplifier {
             .unwrap_or_else(|| Features::new(nv, &self.tris));
         let weight = match self.opts.boundary {
             Boundary::Weighted(w) => w,
-            Boundary::Locked => crate::options::DEFAULT_BOUNDARY_WEIGHT,
+            Boundary::Locked => crate::simplify::options::DEFAULT_BOUNDARY_WEIGHT,
         };
         for &(a, b) in edges {
             if a as usize >= nv || b as usize >= nv {
@@ -1743,31 +1750,6 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
     Ok(())
 }
 
-thread_local! {
-    /// Per-thread vertex marks for [`Simplifier::check`] (which reads
-    /// only, so that the batched walk can run it on several threads):
-    /// marks and the last generation handed out.
-    static MARKS: std::cell::RefCell<(Vec<u32>, u32)> = const { std::cell::RefCell::new((Vec::new(), 0)) };
-}
-
-/// Run `f` with this thread's marks (at least `n` of them) and two fresh
-/// generations `g` and `g + 1` no mark holds yet.
-fn with_marks<R>(n: usize, f: impl FnOnce(&mut [u32], u32) -> R) -> R {
-    MARKS.with(|m| {
-        let (mark, last) = &mut *m.borrow_mut();
-        if mark.len() < n {
-            mark.resize(n, 0);
-        }
-        if *last >= u32::MAX - 2 {
-            mark.fill(0);
-            *last = 0;
-        }
-        let g = *last + 1;
-        *last += 2;
-        f(mark, g)
-    })
-}
-
 /// Edge-connected fans of triangles around `v` (1 for a manifold vertex).
 pub(crate) fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
     let n = ts.len();
@@ -1799,21 +1781,6 @@ pub(crate) fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
     comp.sort_unstable();
     comp.dedup();
     comp.len()
-}
-
-/// A hint to bring `x`'s cache line in (nothing on targets without one).
-#[inline(always)]
-pub(crate) fn prefetch<T>(x: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is only a hint to the cache: it reads no value and
-    // cannot fault, and `x` is a valid reference anyway.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-            (x as *const T).cast::<i8>(),
-        );
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
 }
 
 #[cfg(test)]

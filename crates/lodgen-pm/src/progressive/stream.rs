@@ -48,7 +48,7 @@
 //! log's wedges renumbered by first appearance, with their values.
 
 use crate::mesh::Mesh;
-use crate::vsplit::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
+use crate::progressive::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 use smallvec::SmallVec;
 use thiserror::Error;
 
@@ -351,7 +351,7 @@ fn grid(pm: &ProgressiveMesh, bits: u8) -> ([f32; 3], f32) {
 /// [`encode_with_attributes`]).
 ///
 /// Non-finite coordinates cannot be represented: they are snapped onto the
-/// grid (NaN to its origin). Meshes from [`crate::simplify`] never have them.
+/// grid (NaN to its origin). Meshes from [`crate::simplify()`] never have them.
 pub fn encode(pm: &ProgressiveMesh, levels: &[usize], opts: EncodeOptions) -> Vec<u8> {
     encode_inner(pm, levels, opts, None)
 }
