@@ -23,7 +23,13 @@ use std::time::Instant;
 #[derive(Args, Debug, Clone)]
 pub struct BuildArgs {
     /// Input mesh: .obj, .ply (ascii or binary), .smf, .gltf or .glb.
-    pub input: Option<PathBuf>,
+    /// Several inputs, directories (walked recursively) or quoted glob
+    /// patterns ("assets/**/*.obj") build a batch into --out-dir.
+    #[arg(value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+
+    #[command(flatten)]
+    pub batch: crate::batch::BatchFlags,
 
     /// Output file, .glb or .gltf (.gltf writes one .bin per level beside
     /// it). Default: the input's name with .glb, beside the input
@@ -137,7 +143,8 @@ pub struct BuildArgs {
     #[arg(long)]
     pub progressive: bool,
 
-    /// Also write the table as JSON to this file.
+    /// Also write the table as JSON to this file (in batch mode: every
+    /// file's report with its status, error and time).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
 
@@ -377,15 +384,74 @@ pub fn default_output(input: &Path) -> PathBuf {
     }
 }
 
-/// The main job. Prints the table (unless quiet) and writes the report.
-pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> {
+/// What one build job made: the scene read, its LOD builds and the bytes of
+/// each level as written.
+pub struct BuiltFile {
+    pub output: PathBuf,
+    pub scene: Scene,
+    pub builds: Vec<MeshBuild>,
+    pub level_bytes: Vec<Vec<u64>>,
+}
+
+impl BuiltFile {
+    /// The JSON `--report` of this file.
+    pub fn report_json(&self, input: &Path) -> serde_json::Value {
+        report_json(
+            input,
+            &self.output,
+            &self.scene,
+            &self.builds,
+            &self.level_bytes,
+        )
+    }
+}
+
+/// Read → LODs → write (→ LODGEN_progressive) for one file, without
+/// printing: what `lodgen INPUT` and each file of a batch run.
+pub fn build_file(
+    input: &Path,
+    output: &Path,
+    args: &BuildArgs,
+    on_progress: &mut dyn FnMut(Progress),
+) -> Result<BuiltFile> {
     let opts = args.build_options()?;
-    let output = args.output.clone().unwrap_or_else(|| default_output(input));
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }
-    let t0 = Instant::now();
     let scene = io::read_scene(input).with_context(|| format!("reading {}", input.display()))?;
+    let builds = lod::build_lods(&scene, &opts, on_progress)
+        .with_context(|| format!("simplifying {}", input.display()))?;
+    let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
+    let summary = gltf_out::write_lods(output, &scene, &lods, &args.write_options())
+        .with_context(|| format!("writing {}", output.display()))?;
+    // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
+    if args.progressive {
+        let chains = builds
+            .iter()
+            .map(|b| crate::progressive::ChainStream::from_build(b, &scene.meshes[b.lod.source]))
+            .collect::<Result<Vec<_>, _>>()
+            .context("encoding the vertex-split stream")?;
+        crate::progressive::embed(output, &chains)
+            .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
+    }
+    // --- end LODGEN_progressive ---
+    let level_bytes: Vec<Vec<u64>> = summary
+        .meshes
+        .iter()
+        .map(|m| m.level_bytes.clone())
+        .collect();
+    Ok(BuiltFile {
+        output: output.to_path_buf(),
+        scene,
+        builds,
+        level_bytes,
+    })
+}
+
+/// The main job. Prints the table (unless quiet) and writes the report.
+pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> {
+    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    let t0 = Instant::now();
     let bar = show_progress.then(|| {
         let b = indicatif::ProgressBar::new_spinner();
         b.enable_steady_tick(std::time::Duration::from_millis(120));
@@ -401,38 +467,20 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
             });
         }
     };
-    let builds = lod::build_lods(&scene, &opts, &mut on_progress)
-        .with_context(|| format!("simplifying {}", input.display()))?;
-    if let Some(b) = &bar {
-        b.set_message(format!("writing {}", output.display()));
-    }
-    let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
-    let summary = gltf_out::write_lods(&output, &scene, &lods, &args.write_options())
-        .with_context(|| format!("writing {}", output.display()))?;
-    // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
-    if args.progressive {
-        let chains = builds
-            .iter()
-            .map(|b| crate::progressive::ChainStream::from_build(b, &scene.meshes[b.lod.source]))
-            .collect::<Result<Vec<_>, _>>()
-            .context("encoding the vertex-split stream")?;
-        crate::progressive::embed(&output, &chains)
-            .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
-    }
-    // --- end LODGEN_progressive ---
+    let built = build_file(input, &output, args, &mut on_progress)?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
     let elapsed = t0.elapsed();
-    let level_bytes: Vec<Vec<u64>> = summary
-        .meshes
-        .iter()
-        .map(|m| m.level_bytes.clone())
-        .collect();
+    let BuiltFile {
+        builds,
+        level_bytes,
+        ..
+    } = &built;
     if !args.quiet {
-        print!("{}", table(&builds, &level_bytes));
+        print!("{}", table(builds, level_bytes));
         if args.verbose {
-            for b in &builds {
+            for b in builds {
                 eprintln!("{}: {:#?}", b.lod.name, b.simplified.stats);
                 eprintln!(
                     "{}: stopped: {:?}; prepare: {:?}",
@@ -447,7 +495,7 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
         );
     }
     if let Some(path) = &args.report {
-        let json = report_json(input, &output, &scene, &builds, &level_bytes);
+        let json = built.report_json(input);
         write_atomically(path, serde_json::to_string_pretty(&json)?.as_bytes())
             .with_context(|| format!("writing the report {}", path.display()))?;
     }

@@ -2,6 +2,7 @@
 //! `lodgen` command, on top of the `lodgen-pm` core.
 
 pub mod assets;
+pub mod batch;
 pub mod cli;
 pub mod coverage;
 pub mod gltf_out;

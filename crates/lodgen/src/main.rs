@@ -107,7 +107,10 @@ fn main() -> ExitCode {
 }
 
 fn run_build(args: BuildArgs) -> Result<()> {
-    let Some(input) = args.input.clone() else {
+    if lodgen::batch::is_batch(&args) {
+        return lodgen::batch::run(&args);
+    }
+    let Some(input) = args.inputs.first().cloned() else {
         bail!("no input mesh given (try `lodgen --help`)");
     };
     let show_progress = !args.quiet && std::io::stderr().is_terminal();

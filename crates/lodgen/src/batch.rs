@@ -1,0 +1,694 @@
+//! Batch mode: `lodgen INPUT... --out-dir DIR [--jobs N] [--force]`.
+//!
+//! Inputs are files, directories (walked recursively for the formats lodgen
+//! reads) and glob patterns; each output keeps its input's path relative to
+//! the directory (or the glob's fixed prefix) it was found under, with
+//! `.glb`. Files run on `--jobs` worker threads, each with its own rayon
+//! pool of `cores / jobs` threads, so the machine is not oversubscribed;
+//! every file runs exactly the single-file build ([`cli::build_file`]), so
+//! its bytes are those of `lodgen INPUT -o OUTPUT`. A failing file (even a
+//! panic) is reported and never stops the others.
+//!
+//! Incremental: `DIR/.lodgen-manifest.json` records, per output, the BLAKE3
+//! hash of its input (with the files it refers to: a `.gltf`'s buffers and
+//! images, an `.obj`'s `mtllib`) and of the options; an output whose input,
+//! options and file are unchanged is skipped (`--force` rebuilds).
+
+use crate::cli::{self, BuildArgs};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// The manifest's file name inside `--out-dir`.
+pub const MANIFEST: &str = ".lodgen-manifest.json";
+
+/// Extensions a directory walk picks up (lower case).
+pub const MESH_EXTENSIONS: [&str; 5] = ["obj", "ply", "smf", "gltf", "glb"];
+
+/// The batch flags of `lodgen INPUT...`.
+#[derive(Args, Debug, Clone, Default)]
+pub struct BatchFlags {
+    /// Batch mode: build every INPUT (files, directories walked recursively
+    /// for .obj/.ply/.smf/.gltf/.glb, glob patterns) into this directory,
+    /// keeping each file's path relative to the directory it was found
+    /// under, with .glb. A manifest (.lodgen-manifest.json) there lets a
+    /// re-run skip files whose input and options are unchanged.
+    #[arg(long, value_name = "DIR", conflicts_with = "output")]
+    pub out_dir: Option<PathBuf>,
+
+    /// Batch mode: files built in parallel. Each file's own threads are the
+    /// cores divided by this (at least 1). Default 1 (files one after
+    /// another, each on every core).
+    #[arg(short = 'j', long, value_name = "N", default_value_t = 1)]
+    pub jobs: usize,
+
+    /// Batch mode: rebuild every file, even unchanged ones.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// One input of a batch and where its output goes, relative to `--out-dir`.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct BatchInput {
+    pub input: PathBuf,
+    /// The output's path relative to the output directory.
+    pub relative_output: PathBuf,
+}
+
+fn is_mesh(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| MESH_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+fn has_glob_chars(s: &str) -> bool {
+    s.contains(['*', '?', '['])
+}
+
+fn relative_output(rel: &Path) -> PathBuf {
+    rel.with_extension("glb")
+}
+
+/// Expand the command line's inputs: files as given, directories walked
+/// (sorted, `skip` — the output directory — left out), glob patterns
+/// matched. Errors for inputs that name nothing.
+pub fn expand_inputs(inputs: &[PathBuf], skip: Option<&Path>) -> Result<Vec<BatchInput>> {
+    let skip = skip.and_then(|s| s.canonicalize().ok());
+    let mut out = Vec::new();
+    for arg in inputs {
+        let text = arg.to_string_lossy();
+        if arg.is_dir() {
+            let mut found = Vec::new();
+            let walk = walkdir::WalkDir::new(arg)
+                .follow_links(true)
+                .sort_by_file_name()
+                .into_iter()
+                .filter_entry(|e| {
+                    skip.as_ref()
+                        .is_none_or(|s| e.path().canonicalize().ok().as_ref() != Some(s))
+                });
+            for entry in walk {
+                let entry = entry.with_context(|| format!("walking {}", arg.display()))?;
+                if entry.file_type().is_file() && is_mesh(entry.path()) {
+                    let rel = entry.path().strip_prefix(arg).unwrap_or(entry.path());
+                    found.push(BatchInput {
+                        input: entry.path().to_path_buf(),
+                        relative_output: relative_output(rel),
+                    });
+                }
+            }
+            if found.is_empty() {
+                bail!(
+                    "{}: no .obj, .ply, .smf, .gltf or .glb files in this directory",
+                    arg.display()
+                );
+            }
+            out.extend(found);
+        } else if arg.is_file() {
+            let name = arg.file_name().map(PathBuf::from).unwrap_or_default();
+            out.push(BatchInput {
+                input: arg.clone(),
+                relative_output: relative_output(&name),
+            });
+        } else if has_glob_chars(&text) {
+            // The pattern's fixed prefix (the directories before the first
+            // component with a wildcard) is what outputs are relative to.
+            let base: PathBuf = arg
+                .components()
+                .take_while(|c| !has_glob_chars(&c.as_os_str().to_string_lossy()))
+                .collect();
+            let mut found = Vec::new();
+            for entry in glob::glob(&text).with_context(|| format!("glob pattern {text:?}"))? {
+                let path = entry.with_context(|| format!("glob pattern {text:?}"))?;
+                let in_skip = skip
+                    .as_ref()
+                    .is_some_and(|s| path.canonicalize().ok().is_some_and(|p| p.starts_with(s)));
+                if path.is_file() && !in_skip {
+                    let rel = path.strip_prefix(&base).unwrap_or(&path).to_path_buf();
+                    found.push(BatchInput {
+                        relative_output: relative_output(&rel),
+                        input: path,
+                    });
+                }
+            }
+            if found.is_empty() {
+                bail!("{text}: the pattern matches no file");
+            }
+            out.extend(found);
+        } else {
+            bail!("{}: no such file or directory", arg.display());
+        }
+    }
+    Ok(out)
+}
+
+/// One manifest entry: what an output was built from.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct ManifestEntry {
+    pub input: String,
+    pub input_hash: String,
+    pub options_hash: String,
+    /// The file's report when it was built (shown again when skipped).
+    pub report: serde_json::Value,
+}
+
+/// `DIR/.lodgen-manifest.json`: output path (relative, `/`-separated) →
+/// what it was built from.
+#[derive(Serialize, Deserialize, Clone, Debug, Default, PartialEq)]
+pub struct Manifest {
+    pub lodgen_version: String,
+    pub outputs: BTreeMap<String, ManifestEntry>,
+}
+
+impl Manifest {
+    /// The manifest in `dir`, empty when there is none or it is unreadable
+    /// (then every file is rebuilt).
+    pub fn load(dir: &Path) -> Manifest {
+        std::fs::read(dir.join(MANIFEST))
+            .ok()
+            .and_then(|b| serde_json::from_slice::<Manifest>(&b).ok())
+            .filter(|m| m.lodgen_version == env!("CARGO_PKG_VERSION"))
+            .unwrap_or_default()
+    }
+
+    pub fn save(&self, dir: &Path) -> Result<()> {
+        let path = dir.join(MANIFEST);
+        cli::write_atomically(&path, serde_json::to_string_pretty(self)?.as_bytes())
+            .with_context(|| format!("writing the manifest {}", path.display()))
+    }
+}
+
+fn key(rel: &Path) -> String {
+    rel.components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
+/// The files an input refers to and is read with: a `.gltf`'s external
+/// buffers and images, an `.obj`'s material libraries.
+fn companions(input: &Path, bytes: &[u8]) -> Vec<PathBuf> {
+    let dir = input.parent().unwrap_or(Path::new(""));
+    let ext = input
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("gltf") => {
+            let Ok(doc) = serde_json::from_slice::<serde_json::Value>(bytes) else {
+                return Vec::new();
+            };
+            ["buffers", "images"]
+                .iter()
+                .filter_map(|k| doc[*k].as_array())
+                .flatten()
+                .filter_map(|b| b["uri"].as_str())
+                .filter(|u| !u.starts_with("data:"))
+                .map(|u| dir.join(percent_decode(u)))
+                .collect()
+        }
+        Some("obj") => String::from_utf8_lossy(bytes)
+            .lines()
+            .filter_map(|l| l.trim_start().strip_prefix("mtllib"))
+            .flat_map(|rest| {
+                rest.split_whitespace()
+                    .map(|n| dir.join(n))
+                    .collect::<Vec<_>>()
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Ok(v) = u8::from_str_radix(&s[i + 1..i + 3], 16) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// BLAKE3 of the input and the files it refers to (a missing companion
+/// hashes as missing, so its appearance changes the hash).
+pub fn input_hash(input: &Path) -> std::io::Result<String> {
+    let bytes = std::fs::read(input)?;
+    let mut h = blake3::Hasher::new();
+    h.update(&(bytes.len() as u64).to_le_bytes());
+    h.update(&bytes);
+    for c in companions(input, &bytes) {
+        h.update(c.to_string_lossy().as_bytes());
+        match std::fs::read(&c) {
+            Ok(b) => {
+                h.update(&(b.len() as u64).to_le_bytes());
+                h.update(&b);
+            }
+            Err(_) => {
+                h.update(b"missing");
+            }
+        }
+    }
+    Ok(h.finalize().to_hex().to_string())
+}
+
+/// BLAKE3 of every option that changes the output: all build arguments
+/// except the inputs, the output and report paths, the batch flags and
+/// what only changes printing; plus lodgen's version.
+pub fn options_hash(args: &BuildArgs) -> String {
+    let mut a = args.clone();
+    a.inputs.clear();
+    a.output = None;
+    a.report = None;
+    a.quiet = false;
+    a.verbose = false;
+    a.batch = BatchFlags::default();
+    let text = format!("lodgen {} {:?}", env!("CARGO_PKG_VERSION"), a);
+    blake3::hash(text.as_bytes()).to_hex().to_string()
+}
+
+/// What happened to one file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Status {
+    Built,
+    /// Unchanged input and options: the output was left as it was.
+    Skipped,
+    Failed(String),
+}
+
+/// One file's outcome.
+#[derive(Clone, Debug)]
+pub struct FileOutcome {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    pub status: Status,
+    pub seconds: f64,
+    /// The file's report (`--report` of a single run), when built or skipped.
+    pub report: Option<serde_json::Value>,
+    /// Manifest entry to record (built files).
+    entry: Option<(String, ManifestEntry)>,
+}
+
+/// The summary of a batch.
+pub struct BatchOutcome {
+    pub files: Vec<FileOutcome>,
+    pub seconds: f64,
+}
+
+impl BatchOutcome {
+    pub fn failed(&self) -> usize {
+        self.count(|s| matches!(s, Status::Failed(_)))
+    }
+    pub fn skipped(&self) -> usize {
+        self.count(|s| *s == Status::Skipped)
+    }
+    pub fn built(&self) -> usize {
+        self.count(|s| *s == Status::Built)
+    }
+    fn count(&self, f: impl Fn(&Status) -> bool) -> usize {
+        self.files.iter().filter(|o| f(&o.status)).count()
+    }
+
+    /// The `--report` JSON of a batch.
+    pub fn report_json(&self) -> serde_json::Value {
+        json!({
+            "files": self.files.iter().map(|f| {
+                let (status, error) = match &f.status {
+                    Status::Built => ("built", None),
+                    Status::Skipped => ("skipped", None),
+                    Status::Failed(e) => ("failed", Some(e.clone())),
+                };
+                json!({
+                    "input": f.input.display().to_string(),
+                    "output": f.output.display().to_string(),
+                    "status": status,
+                    "error": error,
+                    "seconds": f.seconds,
+                    "report": f.report,
+                })
+            }).collect::<Vec<_>>(),
+            "built": self.built(),
+            "skipped": self.skipped(),
+            "failed": self.failed(),
+            "seconds": self.seconds,
+        })
+    }
+
+    /// The summary table: file, meshes, triangles in → per level, worst
+    /// error, time, status; failures' messages below it.
+    pub fn table(&self) -> String {
+        let rows: Vec<[String; 6]> = self
+            .files
+            .iter()
+            .map(|f| {
+                let r = f.report.as_ref();
+                let meshes = r
+                    .and_then(|r| r["meshes"].as_array())
+                    .map(|m| m.as_slice())
+                    .unwrap_or_default();
+                let tris_in: u64 = meshes
+                    .iter()
+                    .filter_map(|m| m["input_triangles"].as_u64())
+                    .sum();
+                let per_level = per_level_triangles(meshes);
+                let worst = meshes
+                    .iter()
+                    .filter_map(|m| m["levels"].as_array())
+                    .flatten()
+                    .filter_map(|l| l["hausdorff_percent"].as_f64())
+                    .fold(None, |a: Option<f64>, e| Some(a.map_or(e, |a| a.max(e))));
+                let status = match &f.status {
+                    Status::Built => "built".to_string(),
+                    Status::Skipped => "unchanged".to_string(),
+                    Status::Failed(_) => "FAILED".to_string(),
+                };
+                [
+                    f.input.display().to_string(),
+                    if r.is_some() {
+                        meshes.len().to_string()
+                    } else {
+                        "-".into()
+                    },
+                    if r.is_some() {
+                        format!(
+                            "{tris_in} → {}",
+                            per_level
+                                .iter()
+                                .map(u64::to_string)
+                                .collect::<Vec<_>>()
+                                .join(" / ")
+                        )
+                    } else {
+                        "-".into()
+                    },
+                    worst.map_or("-".into(), |w| format!("{w:.4}")),
+                    format!("{:.2}", f.seconds),
+                    status,
+                ]
+            })
+            .collect();
+        let head = [
+            "file",
+            "meshes",
+            "triangles in → per level",
+            "worst hausdorff %",
+            "time s",
+            "status",
+        ];
+        let mut width: Vec<usize> = head.iter().map(|h| h.chars().count()).collect();
+        for r in &rows {
+            for (w, c) in width.iter_mut().zip(r) {
+                *w = (*w).max(c.chars().count());
+            }
+        }
+        let line = |cells: &[String]| {
+            let mut s = String::new();
+            for (k, (c, w)) in cells.iter().zip(&width).enumerate() {
+                let pad = w - c.chars().count();
+                if k == 0 || k == 2 {
+                    s += c;
+                    s += &" ".repeat(pad);
+                } else {
+                    s += &" ".repeat(pad);
+                    s += c;
+                }
+                s += "  ";
+            }
+            s.trim_end().to_string() + "\n"
+        };
+        let mut s = line(&head.map(String::from));
+        for r in &rows {
+            s += &line(r);
+        }
+        s += &format!(
+            "{} files: {} built, {} unchanged, {} failed in {:.2} s\n",
+            self.files.len(),
+            self.built(),
+            self.skipped(),
+            self.failed(),
+            self.seconds
+        );
+        for f in &self.files {
+            if let Status::Failed(e) = &f.status {
+                s += &format!("FAILED {}: {e}\n", f.input.display());
+            }
+        }
+        s
+    }
+}
+
+/// Triangles of each level summed over the meshes (levels counted finest
+/// first; meshes with fewer levels add nothing to the coarser ones).
+fn per_level_triangles(meshes: &[serde_json::Value]) -> Vec<u64> {
+    let mut out: Vec<u64> = Vec::new();
+    for m in meshes {
+        for (k, l) in m["levels"].as_array().into_iter().flatten().enumerate() {
+            if out.len() <= k {
+                out.push(0);
+            }
+            out[k] += l["triangles"].as_u64().unwrap_or(0);
+        }
+    }
+    out
+}
+
+/// The error chain of `e` on one line, as the CLI prints it.
+fn message(e: &anyhow::Error) -> String {
+    e.chain()
+        .map(|c| c.to_string())
+        .collect::<Vec<_>>()
+        .join(": ")
+}
+
+/// Threads each job's rayon pool gets with `jobs` jobs.
+pub fn threads_per_job(jobs: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (cores / jobs.max(1)).max(1)
+}
+
+/// Run a batch: build (or skip) every input into `out_dir`, update the
+/// manifest. `on_done` is called after each file (from worker threads).
+pub fn run_batch(
+    inputs: &[BatchInput],
+    out_dir: &Path,
+    args: &BuildArgs,
+    on_done: &(dyn Fn(usize, &FileOutcome) + Sync),
+) -> Result<BatchOutcome> {
+    let t0 = Instant::now();
+    // Options are checked once, before any file: a bad flag is not a
+    // per-file failure.
+    args.build_options()?;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("creating the output directory {}", out_dir.display()))?;
+    let mut seen: BTreeMap<String, &Path> = BTreeMap::new();
+    for i in inputs {
+        if let Some(first) = seen.insert(key(&i.relative_output), &i.input) {
+            bail!(
+                "{} and {} would both write {}; build them into different --out-dir",
+                first.display(),
+                i.input.display(),
+                out_dir.join(&i.relative_output).display()
+            );
+        }
+    }
+    let manifest = Manifest::load(out_dir);
+    let options_hash = options_hash(args);
+    let jobs = args.batch.jobs.max(1).min(inputs.len().max(1));
+    let threads = threads_per_job(jobs);
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<FileOutcome>>> = Mutex::new(vec![None; inputs.len()]);
+    let worker = || -> Result<()> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("starting a worker's thread pool")?;
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            let Some(item) = inputs.get(k) else {
+                return Ok(());
+            };
+            let outcome = pool.install(|| one_file(item, out_dir, args, &manifest, &options_hash));
+            on_done(done.fetch_add(1, Ordering::Relaxed) + 1, &outcome);
+            results.lock().unwrap_or_else(|p| p.into_inner())[k] = Some(outcome);
+        }
+    };
+    std::thread::scope(|s| -> Result<()> {
+        let handles: Vec<_> = (0..jobs).map(|_| s.spawn(worker)).collect();
+        for h in handles {
+            h.join()
+                .map_err(|_| anyhow::anyhow!("a batch worker thread panicked"))??;
+        }
+        Ok(())
+    })?;
+    let files: Vec<FileOutcome> = results
+        .into_inner()
+        .unwrap_or_else(|p| p.into_inner())
+        .into_iter()
+        .flatten()
+        .collect();
+    // The manifest keeps entries of outputs not in this batch, records the
+    // built ones and drops the failed ones (their output is stale).
+    let mut next_manifest = Manifest {
+        lodgen_version: env!("CARGO_PKG_VERSION").to_string(),
+        outputs: manifest.outputs.clone(),
+    };
+    for (f, i) in files.iter().zip(inputs) {
+        let k = key(&i.relative_output);
+        match (&f.status, &f.entry) {
+            (Status::Built, Some((k, e))) => {
+                next_manifest.outputs.insert(k.clone(), e.clone());
+            }
+            (Status::Failed(_), _) => {
+                next_manifest.outputs.remove(&k);
+            }
+            _ => {}
+        }
+    }
+    if next_manifest != manifest {
+        next_manifest.save(out_dir)?;
+    }
+    Ok(BatchOutcome {
+        files,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn one_file(
+    item: &BatchInput,
+    out_dir: &Path,
+    args: &BuildArgs,
+    manifest: &Manifest,
+    options_hash: &str,
+) -> FileOutcome {
+    let t0 = Instant::now();
+    let output = out_dir.join(&item.relative_output);
+    let k = key(&item.relative_output);
+    let run = || -> Result<(Status, serde_json::Value, Option<ManifestEntry>)> {
+        let hash =
+            input_hash(&item.input).with_context(|| format!("reading {}", item.input.display()))?;
+        if !args.batch.force && output.is_file() {
+            if let Some(e) = manifest.outputs.get(&k) {
+                if e.input_hash == hash && e.options_hash == options_hash {
+                    return Ok((Status::Skipped, e.report.clone(), None));
+                }
+            }
+        }
+        if let Some(parent) = output.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        let built = cli::build_file(&item.input, &output, args, &mut |_| {})?;
+        let report = built.report_json(&item.input);
+        let entry = ManifestEntry {
+            input: item.input.display().to_string(),
+            input_hash: hash,
+            options_hash: options_hash.to_string(),
+            report: report.clone(),
+        };
+        Ok((Status::Built, report, Some(entry)))
+    };
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)).unwrap_or_else(|p| {
+        let what = p
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        Err(anyhow::anyhow!(
+            "internal error while building {}: {what}",
+            item.input.display()
+        ))
+    });
+    let seconds = t0.elapsed().as_secs_f64();
+    match result {
+        Ok((status, report, entry)) => FileOutcome {
+            input: item.input.clone(),
+            output,
+            status,
+            seconds,
+            report: Some(report),
+            entry: entry.map(|e| (k, e)),
+        },
+        Err(e) => FileOutcome {
+            input: item.input.clone(),
+            output,
+            status: Status::Failed(message(&e)),
+            seconds,
+            report: None,
+            entry: None,
+        },
+    }
+}
+
+/// Whether these arguments ask for batch mode: `--out-dir`, several inputs,
+/// a directory or a glob pattern.
+pub fn is_batch(args: &BuildArgs) -> bool {
+    args.batch.out_dir.is_some()
+        || args.inputs.len() > 1
+        || args
+            .inputs
+            .first()
+            .is_some_and(|i| i.is_dir() || (!i.exists() && has_glob_chars(&i.to_string_lossy())))
+}
+
+/// `lodgen INPUT... --out-dir DIR`: run the batch, print progress (stderr)
+/// and the summary table (stdout) unless quiet, write `--report`; an error
+/// when any file failed.
+pub fn run(args: &BuildArgs) -> Result<()> {
+    let Some(out_dir) = &args.batch.out_dir else {
+        bail!("several inputs or a directory need --out-dir DIR (batch mode)");
+    };
+    if args.batch.jobs == 0 {
+        bail!("--jobs must be at least 1");
+    }
+    let inputs = expand_inputs(&args.inputs, Some(out_dir))?;
+    let total = inputs.len();
+    let quiet = args.quiet;
+    let on_done = move |n: usize, f: &FileOutcome| {
+        if !quiet || matches!(f.status, Status::Failed(_)) {
+            let status = match &f.status {
+                Status::Built => "built".to_string(),
+                Status::Skipped => "unchanged".to_string(),
+                Status::Failed(e) => format!("FAILED: {e}"),
+            };
+            eprintln!(
+                "[{n}/{total}] {} ({:.2} s) {status}",
+                f.input.display(),
+                f.seconds
+            );
+        }
+    };
+    let outcome = run_batch(&inputs, out_dir, args, &on_done)?;
+    if !args.quiet {
+        print!("{}", outcome.table());
+    }
+    if let Some(path) = &args.report {
+        cli::write_atomically(
+            path,
+            serde_json::to_string_pretty(&outcome.report_json())?.as_bytes(),
+        )
+        .with_context(|| format!("writing the report {}", path.display()))?;
+    }
+    if outcome.failed() > 0 {
+        bail!(
+            "{} of {} files failed (the others were built)",
+            outcome.failed(),
+            outcome.files.len()
+        );
+    }
+    Ok(())
+}
