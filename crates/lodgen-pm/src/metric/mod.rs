@@ -15,7 +15,7 @@
 //! let t = [[0u32, 1, 2]];
 //! let mesh = MeshRef::new(&p, &t);
 //! let e = measure(mesh, mesh, &MeasureOptions::default()).unwrap();
-//! assert_eq!(e.hausdorff(), 0.0);
+//! assert!(e.hausdorff() < 1e-9); // (a mesh against itself: 0 up to rounding)
 //! ```
 
 use thiserror::Error;
