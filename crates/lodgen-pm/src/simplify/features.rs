@@ -36,7 +36,7 @@
 //! `entry`).
 
 pub(crate) use crate::simplify::attrquadric::AttributeCost;
-use crate::simplify::Rejected;
+use crate::simplify::legality::Rejected;
 use smallvec::SmallVec;
 
 /// How a vertex may move, from its feature-edge count (module table).

@@ -1,0 +1,156 @@
+//! One contraction: `v0` into `v1`, recorded in the vertex-split log, with
+//! fans, features, attribute quadrics, τ partners and (greedy) the heap
+//! brought up to date.
+
+use super::{fv, Plan, Simplifier};
+use crate::mesh::adjacency::FanLookup;
+use crate::progressive::{Contraction, Corner, Removed};
+use crate::simplify::features::WedgeEdits;
+use crate::simplify::options::Schedule;
+
+impl Simplifier {
+    /// Contract `v0` into `v1` at `p`, record it, and re-queue `v1`'s pairs.
+    pub(super) fn contract(&mut self, plan: Plan) {
+        let Plan {
+            v0,
+            v1,
+            p,
+            error,
+            removed,
+        } = plan;
+        let (i0, i1) = (v0 as usize, v1 as usize);
+        let merged = fv(p);
+        let edits = self.features.as_ref().map(|f| {
+            let e = f.wedge_edits(
+                [v0, v1],
+                &self.tris,
+                self.vtris.fan(v0),
+                self.vtris.fan(v1),
+                &self.tri_alive,
+                &removed,
+            );
+            (e, f.wedges.is_some())
+        });
+        let mut record = Contraction {
+            v0,
+            v1,
+            p1: self.pos[i1],
+            removed: Removed::new(&removed),
+            moved: self.log.mark()..self.log.mark(),
+            error,
+        };
+        for &t in &record.removed {
+            self.tri_alive[t as usize] = false;
+        }
+        self.live_tris -= record.removed.len();
+        self.move_fan(v0, v1, &edits);
+        self.pos[i1] = merged;
+        let q0 = self.quadric[i0];
+        self.quadric[i1] += q0;
+        self.alive[i0] = false;
+        if let Some(v) = self.version.get_mut(i1) {
+            *v = v.wrapping_add(1);
+        }
+        self.boundary[i1] |= self.boundary[i0];
+        if let Some(f) = &mut self.features {
+            f.contract(v0, v1);
+        }
+        if let Some(at) = &mut self.attributes {
+            let w = self.features.as_ref().and_then(|f| f.wedges.as_deref());
+            let e = edits.as_ref().map_or(&[][..], |e| &e.0[..]);
+            at.contract(v0, v1, &record.removed, e, &self.tris, w);
+        }
+        self.merge_partners(v0, v1);
+        record.moved.end = self.log.mark();
+        self.log.records.push(record);
+        self.stats.collapses += 1;
+        if self.opts.schedule == Schedule::Greedy {
+            self.requeue(v1);
+        }
+    }
+
+    /// `v1`'s new fan: its live triangles, then `v0`'s moved ones (whose
+    /// `v0` corner becomes `v1`, logged with its wedge edit if wedges are
+    /// tracked).
+    fn move_fan(&mut self, v0: u32, v1: u32, edits: &Option<(WedgeEdits, bool)>) {
+        // v1's new fan: its live triangles, then v0's moved ones
+        let mut into = std::mem::take(&mut self.fan_scratch);
+        into.clear();
+        into.extend(
+            self.vtris
+                .fan(v1)
+                .iter()
+                .copied()
+                .filter(|&t| self.tri_alive[t as usize]),
+        );
+        for &t in self.vtris.fan(v0) {
+            if !self.tri_alive[t as usize] {
+                continue;
+            }
+            let tri = &mut self.tris[t as usize];
+            if let Some(k) = tri.iter().position(|&x| x == v0) {
+                tri[k] = v1;
+                self.log.push_corner(Corner {
+                    triangle: t,
+                    slot: k as u8,
+                });
+                into.push(t);
+                if let (Some((edits, true)), Some(f)) = (&edits, &mut self.features) {
+                    let e = edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1);
+                    if let Some(w) = f.wedges.as_mut() {
+                        w[t as usize][k] = e[1];
+                    }
+                    self.log.wedges.push(e);
+                }
+            }
+        }
+        self.vtris.set(v1, &into);
+        self.fan_scratch = into;
+    }
+
+    /// `v1` takes `v0`'s τ partners (but themselves and dead ones).
+    fn merge_partners(&mut self, v0: u32, v1: u32) {
+        let (i0, i1) = (v0 as usize, v1 as usize);
+        if !self.partners(v0).is_empty() || !self.partners(v1).is_empty() {
+            let mut p = std::mem::take(&mut self.partners[i0]);
+            p.append(&mut self.partners[i1]);
+            p.retain(|&x| x != v1 && x != v0 && self.alive[x as usize]);
+            p.sort_unstable();
+            p.dedup();
+            self.partners[i1] = p;
+        }
+    }
+
+    /// [`Schedule::Greedy`]: re-queue every pair of `v1`, its edge
+    /// neighbours and τ partners.
+    fn requeue(&mut self, v1: u32) {
+        let i1 = v1 as usize;
+        let g = self.next_generation();
+        let mut ns = std::mem::take(&mut self.scratch);
+        ns.clear();
+        if self.vtris.bloated() {
+            self.vtris.rebuild(&self.tris, &self.tri_alive);
+        }
+        for &t in self.vtris.fan(v1) {
+            for &x in &self.tris[t as usize] {
+                if x != v1 && self.mark[x as usize] != g {
+                    self.mark[x as usize] = g;
+                    ns.push(x);
+                }
+            }
+        }
+        for &x in self.partners.get(i1).map_or(&[][..], |p| &p[..]) {
+            if self.mark[x as usize] != g {
+                self.mark[x as usize] = g;
+                ns.push(x);
+            }
+        }
+        for &x in &ns {
+            if !(self.locked[i1] && self.locked[x as usize]) {
+                let e = self.entry(v1, x);
+                self.heap.push(e);
+            }
+        }
+        self.scratch = ns;
+    }
+}

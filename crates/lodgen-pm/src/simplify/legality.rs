@@ -1,0 +1,221 @@
+//! Legality of a contraction, shared by [`super::Simplifier`] and the
+//! curvature-adaptive sweeps: the link condition (the result stays
+//! manifold), no flipped or sliver faces, no duplicate faces. Owns
+//! [`Rejected`], which the feature rules use too.
+
+use crate::mesh::adjacency::FanLookup;
+use crate::util::with_marks;
+use glam::DVec3;
+use smallvec::SmallVec;
+
+#[inline]
+fn dv(p: [f32; 3]) -> DVec3 {
+    DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+}
+
+/// A moved triangle whose new normal is turned more than ≈75.5° from its old
+/// one (cos < 0.25) counts as flipped. A pure 90° test (cos < 0) lets chains
+/// of collapses that each turn a face by 80–89° fold the surface over.
+pub const FLIP_MIN_COS: f64 = 0.25;
+
+/// A moved triangle whose area shrinks below this fraction of its old area
+/// (squared-normal ratio 1e-12 ≈ area ratio 1e-6) becomes a sliver that
+/// breaks normals and later flip tests.
+pub const DEGENERATE_AREA_RATIO_SQ: f64 = 1e-12;
+
+/// Why a candidate contraction was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rejected {
+    /// Both vertices are locked (boundary lock, non-manifold).
+    Locked,
+    /// The link condition fails: the one-rings share a vertex that is not
+    /// opposite the edge (the result would be non-manifold).
+    Link,
+    /// Two border vertices joined by an interior edge (would pinch).
+    BoundaryPinch,
+    /// A moved triangle's normal turns by more than the flip threshold.
+    Flip,
+    /// A moved triangle would lose (nearly) all its area.
+    Degenerate,
+    /// A moved triangle would land on an existing one: a tetrahedron or a
+    /// small closed component flattening into a double-sided sheet.
+    Duplicate,
+    /// The contraction's error exceeds `max_error`.
+    Error,
+    /// A feature vertex (seam, material border, hard edge) would leave its
+    /// feature line, or a seam corner would be removed (see `features`).
+    Feature,
+}
+
+/// The mesh state the legality tests read (shared by `Simplifier` and the
+/// curvature-adaptive sweeps).
+pub(crate) struct Faces<'a, F: FanLookup + ?Sized> {
+    pub tris: &'a [[u32; 3]],
+    pub alive: &'a [bool],
+    pub vtris: &'a F,
+    pub pos: &'a [[f32; 3]],
+}
+
+// (by hand: a derive would ask `F: Copy`, and `F` is only borrowed)
+impl<F: FanLookup + ?Sized> Clone for Faces<'_, F> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<F: FanLookup + ?Sized> Copy for Faces<'_, F> {}
+
+/// What the link condition of contracting `v0` into `v1` reads: the live
+/// triangles on both (deleted by the contraction), their third vertices,
+/// and how many distinct vertices besides the two are on both one-rings.
+/// The condition holds when `common == shared.len()` and the opposite
+/// vertices differ.
+pub(crate) struct Link {
+    pub shared: SmallVec<[u32; 2]>,
+    pub opposite: SmallVec<[u32; 2]>,
+    pub common: usize,
+}
+
+/// The [`Link`] of `v0` and `v1` (on this thread's vertex marks: it only
+/// reads the mesh, so that the batched walk can run it on many pairs).
+pub(crate) fn link<F: FanLookup + ?Sized>(f: Faces<'_, F>, v0: u32, v1: u32) -> Link {
+    let mut shared: SmallVec<[u32; 2]> = SmallVec::new();
+    let mut opposite: SmallVec<[u32; 2]> = SmallVec::new();
+    let common = with_marks(f.pos.len(), |mark, g| {
+        // the one-ring of v0 gets g, its vertices also on v1's get g + 1
+        for &t in f.vtris.fan(v0) {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            let tri = f.tris[t as usize];
+            if tri.contains(&v1) {
+                shared.push(t);
+                if let Some(&o) = tri.iter().find(|&&x| x != v0 && x != v1) {
+                    opposite.push(o);
+                }
+            }
+            for &x in &tri {
+                mark[x as usize] = g;
+            }
+        }
+        if shared.len() > 2 {
+            return 0; // fails anyway
+        }
+        let mut common = 0;
+        for &t in f.vtris.fan(v1) {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            for &x in &f.tris[t as usize] {
+                if x != v1 && x != v0 && mark[x as usize] == g {
+                    mark[x as usize] = g + 1; // count each once
+                    common += 1;
+                }
+            }
+        }
+        common
+    });
+    Link {
+        shared,
+        opposite,
+        common,
+    }
+}
+
+/// The geometric legality of contracting `v0` into `v1` at `p`, `shared`
+/// being the triangles on both (deleted) and `opposite` their third
+/// vertices, once the link condition holds: no moved face may flip (turn
+/// by more than [`FLIP_MIN_COS`]) or collapse to a sliver
+/// ([`DEGENERATE_AREA_RATIO_SQ`]), and no moved face may land on an
+/// existing one (a tetrahedron or small closed part flattening into a
+/// sheet).
+pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
+    f: Faces<'_, F>,
+    v0: u32,
+    v1: u32,
+    p: DVec3,
+    opposite: &[u32],
+) -> Result<(), Rejected> {
+    for (moving, other) in [(v0, v1), (v1, v0)] {
+        let pm = dv(f.pos[moving as usize]);
+        if pm == p {
+            continue; // (a half-edge survivor) its faces do not move
+        }
+        for &t in f.vtris.fan(moving) {
+            if !f.alive[t as usize] {
+                continue;
+            }
+            let tri = f.tris[t as usize];
+            // the two other corners, in the triangle's winding order
+            let (b, c) = match tri {
+                [x, b, c] | [c, x, b] | [b, c, x] if x == moving => (b, c),
+                _ => continue, // (not on `moving`: a dead vertex's stale list)
+            };
+            if b == other || c == other {
+                continue;
+            }
+            let (b, c) = (dv(f.pos[b as usize]), dv(f.pos[c as usize]));
+            let bc = c - b;
+            let n_old = (b - pm).cross(bc);
+            let n_new = (b - p).cross(bc);
+            let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
+            if l_old > 0.0 {
+                if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
+                    return Err(Rejected::Degenerate);
+                }
+                // cos < FLIP_MIN_COS, without a square root: a negative
+                // dot product is a flip, else compare squares
+                let d = n_old.dot(n_new);
+                if d < 0.0 || d * d < FLIP_MIN_COS * FLIP_MIN_COS * (l_old * l_new) {
+                    return Err(Rejected::Flip);
+                }
+            }
+        }
+    }
+    // With the link condition, a moved face `v0 x y` can only land on an
+    // existing `v1 x y` when x and y are the two opposite vertices.
+    if let &[o1, o2] = opposite {
+        let has_face = |v: u32| {
+            f.vtris.fan(v).iter().any(|&t| {
+                let tri = f.tris[t as usize];
+                f.alive[t as usize] && tri.contains(&o1) && tri.contains(&o2)
+            })
+        };
+        if has_face(v0) && has_face(v1) {
+            return Err(Rejected::Duplicate);
+        }
+    }
+    Ok(())
+}
+
+/// Edge-connected fans of triangles around `v` (1 for a manifold vertex).
+pub(crate) fn fan_count(tris: &[[u32; 3]], v: u32, ts: &[u32]) -> usize {
+    let n = ts.len();
+    if n <= 1 {
+        return n;
+    }
+    let others = |t: u32| -> [u32; 2] {
+        let tri = tris[t as usize];
+        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+        [tri[(k + 1) % 3], tri[(k + 2) % 3]]
+    };
+    let mut comp: SmallVec<[u32; 16]> = (0..n as u32).collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for i in 0..n {
+            let oi = others(ts[i]);
+            for j in i + 1..n {
+                let oj = others(ts[j]);
+                if oi.iter().any(|x| oj.contains(x)) && comp[i] != comp[j] {
+                    let m = comp[i].min(comp[j]);
+                    comp[i] = m;
+                    comp[j] = m;
+                    changed = true;
+                }
+            }
+        }
+    }
+    comp.sort_unstable();
+    comp.dedup();
+    comp.len()
+}

@@ -1,0 +1,115 @@
+//! The read-only half of a step: where the pair goes, which end is
+//! removed, whether the error is within `max_error`, and whether the
+//! contraction is legal ([`super::legality`]). Reads nothing outside the
+//! closed one-rings of the pair (what the batched walk relies on).
+
+use super::legality::{link, moved_faces_ok, Faces, Link};
+use super::{dv, Plan, Rejected, Simplifier};
+use crate::mesh::adjacency::FanLookup;
+use crate::util::prefetch;
+use glam::DVec3;
+use smallvec::SmallVec;
+
+impl Simplifier {
+    /// Re-cost the pair `(a, b)` (exact: its vertices are current) and
+    /// contract it if it is within `max_error` and legal.
+    pub(super) fn try_contract(&mut self, a: u32, b: u32) -> Result<(), Rejected> {
+        let plan = self.plan(a, b)?;
+        self.contract(plan);
+        Ok(())
+    }
+
+    /// The read-only half of [`Simplifier::try_contract`]: where the pair
+    /// `(a, b)` would go, which end is removed, and whether that is legal.
+    /// It reads nothing outside the closed one-rings of `a` and `b` (what
+    /// the batched walk's invalidation relies on, see `walk_batch`).
+    pub(super) fn plan(&self, a: u32, b: u32) -> Result<Plan, Rejected> {
+        let (ai, bi) = (a as usize, b as usize);
+        let q = self.quadric[ai] + self.quadric[bi];
+        let (p, cost) = self.target_with(&q, a, b);
+        let error = if q.weight > 0.0 {
+            (cost / q.weight).sqrt()
+        } else {
+            cost.sqrt()
+        };
+        if self.opts.max_error.is_some_and(|m| error > m) {
+            return Err(Rejected::Error);
+        }
+        // v1 (kept) is the endpoint the new vertex is closer to.
+        let (v0, v1) = if self.locked[ai]
+            || (!self.locked[bi]
+                && (p - dv(self.pos[ai])).length_squared()
+                    <= (p - dv(self.pos[bi])).length_squared())
+        {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        let removed = self.check(v0, v1, p)?;
+        Ok(Plan {
+            v0,
+            v1,
+            p,
+            error: error as f32,
+            removed,
+        })
+    }
+
+    /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
+    /// On success returns the triangles the contraction deletes.
+    pub(super) fn check(&self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
+        let (i0, i1) = (v0 as usize, v1 as usize);
+        if self.locked[i0] && self.locked[i1] {
+            return Err(Rejected::Locked);
+        }
+        if let Some(f) = &self.features {
+            f.allows(v0, v1)?;
+        }
+        let faces = Faces {
+            tris: &self.tris,
+            alive: &self.tri_alive,
+            vtris: &self.vtris,
+            pos: &self.pos,
+        };
+        let Link {
+            shared,
+            opposite,
+            common,
+        } = link(faces, v0, v1);
+        if shared.len() == 2 && self.boundary[i0] && self.boundary[i1] {
+            return Err(Rejected::BoundaryPinch);
+        }
+        if shared.len() > 2 {
+            return Err(Rejected::Link);
+        }
+        if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
+            return Err(Rejected::Link);
+        }
+        moved_faces_ok(faces, v0, v1, p, &opposite)?;
+        Ok(shared)
+    }
+
+    /// Prefetch what planning the pair `(a, b)` reads first about its
+    /// vertices: their fan spans, quadrics and positions.
+    #[inline]
+    pub(super) fn prefetch_vertices(&self, a: u32, b: u32) {
+        for v in [a, b] {
+            self.vtris.prefetch_span(v);
+            // 88 bytes, 8-aligned: up to three cache lines, each holding
+            // one of these fields
+            let q = &self.quadric[v as usize];
+            prefetch(&q.a2);
+            prefetch(&q.bc);
+            prefetch(&q.weight);
+            prefetch(&self.pos[v as usize]);
+        }
+    }
+
+    /// Prefetch the triangles of `v`'s fan (its list must be at hand).
+    #[inline]
+    pub(super) fn prefetch_triangles(&self, v: u32) {
+        for &t in self.vtris.fan(v) {
+            prefetch(&self.tris[t as usize]);
+        }
+    }
+}

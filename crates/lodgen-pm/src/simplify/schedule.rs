@@ -1,0 +1,289 @@
+//! Which pair is tried next. [`Schedule::Greedy`]: the cheapest pair of a
+//! lazily invalidated heap. [`Schedule::Passes`]: passes over every live
+//! pair, costed in parallel (a lane batch at a time), bucketed by cost and
+//! sorted as far as the walk gets, each pass stopping at a cost limit.
+
+use super::{dv, Entry, PassEntry, Rejected, Simplifier, StopReason};
+use crate::mesh::adjacency::FanLookup;
+use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
+use crate::simplify::options::{Placement, Schedule};
+use crate::simplify::quadric::{CostLanes, LANES};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// One chunk of a pass's costing: its entries, and (compacting) its
+/// vertices' live fans and their lengths.
+type CostedChunk = (Vec<PassEntry>, Vec<u32>, Vec<u32>);
+
+/// A pass entry's bucket: the top 11 bits of its cost's order key.
+#[inline]
+fn pass_bucket(cost: f32) -> usize {
+    (f32_order_key(cost) >> 21) as usize
+}
+
+/// The order of a pass: by cost (`total_cmp`), as a sort key. Sorted
+/// stably from entries generated in (a, b) order, this is the total order
+/// (cost, a, b).
+#[inline]
+fn pass_order(x: &PassEntry) -> u32 {
+    f32_order_key(x.cost)
+}
+
+impl Simplifier {
+    /// Re-cost every queued pair (after the costs' inputs changed).
+    pub(super) fn rebuild_heap(&mut self) {
+        if self.opts.schedule != Schedule::Greedy {
+            // the next step starts a fresh pass
+            self.pass.queue.clear();
+            self.pass.buckets = Buckets::default();
+            self.pass.cursor = 0;
+            self.pass.open = false;
+            return;
+        }
+        let mut pairs: Vec<(u32, u32)> = self.heap.drain().map(|e| (e.a, e.b)).collect();
+        pairs.retain(|&(a, b)| self.alive[a as usize] && self.alive[b as usize]);
+        pairs.sort_unstable();
+        pairs.dedup();
+        let entries: Vec<Entry> = pairs.iter().map(|&(a, b)| self.entry(a, b)).collect();
+        self.heap = QuadHeap::from_vec(entries);
+    }
+
+    pub(super) fn step_inner(&mut self) -> Result<(), StopReason> {
+        if self.live_tris <= self.target {
+            return Err(StopReason::Target);
+        }
+        match self.opts.schedule {
+            Schedule::Greedy => self.step_greedy(),
+            Schedule::Passes { factor } => self.step_pass(factor),
+        }
+    }
+
+    pub(super) fn step_greedy(&mut self) -> Result<(), StopReason> {
+        while let Some(e) = self.heap.pop() {
+            let (a, b) = (e.a as usize, e.b as usize);
+            if !self.alive[a]
+                || !self.alive[b]
+                || self.version[a] != e.va
+                || self.version[b] != e.vb
+            {
+                continue;
+            }
+            match self.try_contract(e.a, e.b) {
+                Ok(()) => return Ok(()),
+                Err(r) => self.stats.rejected.count(r),
+            }
+        }
+        Err(if self.stats.rejected.error > 0 {
+            StopReason::MaxError
+        } else {
+            StopReason::Exhausted
+        })
+    }
+
+    pub(super) fn step_pass(&mut self, factor: f32) -> Result<(), StopReason> {
+        loop {
+            let pass = &mut self.pass;
+            if pass.cursor >= pass.queue.len() {
+                if pass.open && pass.collapses == 0 {
+                    // nothing changed: the next pass would be the same
+                    return Err(if pass.error_rejections > 0 {
+                        StopReason::MaxError
+                    } else {
+                        StopReason::Exhausted
+                    });
+                }
+                self.start_pass(factor);
+                if self.pass.queue.is_empty() {
+                    return Err(StopReason::Exhausted);
+                }
+                continue;
+            }
+            if pass.cursor >= pass.buckets.sorted_end() {
+                pass.buckets
+                    .sort_through(&mut pass.queue, pass.cursor, pass_order);
+            }
+            let e = pass.queue[pass.cursor];
+            if e.cost > pass.cost_limit && pass.removed > pass.goal / 6 {
+                pass.cursor = pass.queue.len();
+                continue;
+            }
+            pass.cursor += 1;
+            let n = pass.number;
+            if pass.touched[e.a as usize] == n || pass.touched[e.b as usize] == n {
+                continue;
+            }
+            let before = self.live_tris;
+            match self.try_contract(e.a, e.b) {
+                Ok(()) => {
+                    let pass = &mut self.pass;
+                    pass.touched[e.a as usize] = n;
+                    pass.touched[e.b as usize] = n;
+                    pass.removed += before - self.live_tris;
+                    pass.collapses += 1;
+                    return Ok(());
+                }
+                Err(r) => {
+                    if r == Rejected::Error {
+                        self.pass.error_rejections += 1;
+                    }
+                    self.stats.rejected.count(r);
+                }
+            }
+        }
+    }
+
+    /// Cost every live pair (edges and τ partners, both vertices not
+    /// locked), sort, and set the pass's goal and cost limit. Pairs are
+    /// sorted by the total order (cost, a, b): the order depends on nothing
+    /// but the mesh (not on the thread count).
+    pub(super) fn start_pass(&mut self, factor: f32) {
+        let t0 = Instant::now();
+        // The costing reads every live vertex's fan and skips its dead
+        // triangles; once the rewritten lists reach half the CSR it also
+        // writes the live ones out, and they become the new CSR (compacted
+        // where they are read anyway, not by a pass over all triangles).
+        // (The fans `new` builds are compact: the first pass never does.)
+        let compact = self.vtris.half_dead();
+        const CHUNK: usize = 2048;
+        let nv = self.pos.len();
+        let this = &*self;
+        // pairs that take `placement` (most) are costed a lane batch at a
+        // time, the others one by one by `key`
+        let lanes_apply = self.attributes.is_none() && self.opts.placement == Placement::Optimal;
+        let chunks: Vec<CostedChunk> = (0..nv.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| this.cost_chunk(c * CHUNK..((c + 1) * CHUNK).min(nv), compact, lanes_apply))
+            .collect();
+        let mut parts = Vec::with_capacity(chunks.len());
+        if compact {
+            let (mut lists, mut lens) = (Vec::new(), Vec::new());
+            for (out, fans, len) in chunks {
+                parts.push(out);
+                lists.push(fans);
+                lens.push(len);
+            }
+            self.vtris.replace(&lists, &lens);
+        } else {
+            parts.extend(chunks.into_iter().map(|c| c.0));
+        }
+        let mut queue: Vec<PassEntry> = std::mem::take(&mut self.pass.queue);
+        let mut buckets = Buckets::scatter(parts, &mut queue, |e| pass_bucket(e.cost));
+        let goal = self.live_tris.saturating_sub(self.target);
+        // most contractions remove two triangles
+        let limit = if goal / 2 < queue.len() {
+            buckets.sort_through(&mut queue, goal / 2, pass_order);
+            queue[goal / 2].cost * factor
+        } else {
+            f32::INFINITY
+        };
+        // the pass (nearly always) stops at the limit: sort up to it now,
+        // in parallel, the rest only if the walk gets there
+        buckets.sort_through_bucket(&mut queue, pass_bucket(limit), pass_order);
+        let pass = &mut self.pass;
+        pass.number += 1;
+        pass.open = true;
+        pass.queue = queue;
+        pass.buckets = buckets;
+        pass.cursor = 0;
+        pass.goal = goal;
+        pass.removed = 0;
+        pass.collapses = 0;
+        pass.error_rejections = 0;
+        pass.cost_limit = limit;
+        self.stats.passes += 1;
+        self.stats.time.heap += t0.elapsed();
+    }
+
+    /// Cost the live pairs `(v, x)`, `v < x`, of the vertices `range`, in
+    /// `(v, x)` order, skipping pairs of two locked vertices; pairs of two
+    /// free vertices a lane batch at a time when `lanes_apply`. With
+    /// `compact`, also each vertex's live fan and its length.
+    fn cost_chunk(
+        &self,
+        range: std::ops::Range<usize>,
+        compact: bool,
+        lanes_apply: bool,
+    ) -> CostedChunk {
+        let mut out = Vec::with_capacity(3 * range.len());
+        // compacted fans: the lists, and each vertex's length
+        let (mut fans, mut lens) = (Vec::new(), Vec::new());
+        let mut lanes = CostLanes::default();
+        // where each lane's entry is in `out`
+        let mut slots = [0usize; LANES];
+        let flush = |lanes: &mut CostLanes, out: &mut Vec<PassEntry>, slots: &[usize]| {
+            let n = lanes.len();
+            let costs = lanes.costs();
+            for (&i, &cost) in slots[..n].iter().zip(&costs[..n]) {
+                out[i].cost = self.scaled(cost, out[i].a, out[i].b);
+            }
+        };
+        let mut nb: Vec<u32> = Vec::with_capacity(32);
+        for v in range.start as u32..range.end as u32 {
+            let vi = v as usize;
+            if !self.alive[vi] {
+                if compact {
+                    lens.push(0);
+                }
+                continue;
+            }
+            // neighbours above v, each once, in fan order
+            nb.clear();
+            let mut add = |x: u32| {
+                if x > v && !nb.contains(&x) {
+                    nb.push(x);
+                }
+            };
+            let before = fans.len();
+            for &t in self.vtris.fan(v) {
+                if self.tri_alive[t as usize] {
+                    let [x, y, z] = self.tris[t as usize];
+                    add(x);
+                    add(y);
+                    add(z);
+                    if compact {
+                        fans.push(t);
+                    }
+                }
+            }
+            if compact {
+                lens.push((fans.len() - before) as u32);
+            }
+            for &x in self.partners(v) {
+                if self.alive[x as usize] {
+                    add(x);
+                }
+            }
+            // in (a, b) order: the buckets keep it, and a stable
+            // sort by cost then gives the total order
+            nb.sort_unstable();
+            for &x in &nb {
+                if self.locked[vi] && self.locked[x as usize] {
+                    continue;
+                }
+                if lanes_apply && self.free(v) && self.free(x) {
+                    slots[lanes.len()] = out.len();
+                    out.push(PassEntry {
+                        cost: 0.0,
+                        a: v,
+                        b: x,
+                    });
+                    let q = self.quadric[vi] + self.quadric[x as usize];
+                    lanes.push(&q, dv(self.pos[vi]), dv(self.pos[x as usize]));
+                    if lanes.is_full() {
+                        flush(&mut lanes, &mut out, &slots);
+                    }
+                } else {
+                    out.push(PassEntry {
+                        cost: self.key(v, x),
+                        a: v,
+                        b: x,
+                    });
+                }
+            }
+        }
+        if !lanes.is_empty() {
+            flush(&mut lanes, &mut out, &slots);
+        }
+        (out, fans, lens)
+    }
+}

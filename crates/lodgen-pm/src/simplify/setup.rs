@@ -1,0 +1,491 @@
+//! Set-up (GH97 §4, §6.1): every vertex classified from its own fan
+//! (interior, border, non-manifold or several fans: locked) with its
+//! quadric (face planes plus border constraint planes), the sorted edge
+//! list, τ pairs, the greedy heap, and feature-edge constraint planes.
+
+use super::{dv, Entry, Pass, Simplifier, Stats};
+use crate::mesh::adjacency::{FanLookup, Fans};
+use crate::mesh::Mesh;
+use crate::progressive::Log;
+use crate::simplify::features::Features;
+use crate::simplify::heap::QuadHeap;
+use crate::simplify::options::{Boundary, Schedule, SimplifyOptions};
+use crate::simplify::pairs;
+use crate::simplify::quadric::Quadric;
+use glam::DVec3;
+use rayon::prelude::*;
+use smallvec::SmallVec;
+
+impl Simplifier {
+    /// The simplifier over `mesh` with every vertex classified and its
+    /// quadric summed, and no pairs yet; with the sorted edge list (when
+    /// the greedy heap or τ pairs need it) and τ.
+    pub(super) fn classified(
+        mesh: Mesh,
+        opts: &SimplifyOptions,
+    ) -> (Simplifier, Vec<(u32, u32)>, f64) {
+        let nv = mesh.positions.len();
+        let nt = mesh.triangles.len();
+        let vtris = Fans::new(nv, &mesh.triangles, |_| true);
+        let (quadric, boundary, locked) = classify_all(&mesh, &vtris, opts);
+        let tau = opts.tau_for(mesh.diagonal());
+        // Sorted edges (only the greedy heap and τ pairs need the list).
+        let edges = if opts.schedule == Schedule::Greedy || tau > 0.0 {
+            sorted_edges(&mesh, &vtris)
+        } else {
+            Vec::new()
+        };
+
+        let mut s = Simplifier {
+            opts: *opts,
+            target: opts.target_for(nt),
+            pos: mesh.positions,
+            quadric,
+            tris: mesh.triangles,
+            tri_alive: vec![true; nt],
+            vtris,
+            partners: Vec::new(),
+            version: if opts.schedule == Schedule::Greedy {
+                vec![0; nv]
+            } else {
+                Vec::new()
+            },
+            alive: vec![true; nv],
+            locked,
+            boundary,
+            heap: QuadHeap::from_vec(Vec::new()),
+            pass: Pass {
+                touched: vec![0; nv],
+                ..Pass::default()
+            },
+            live_tris: nt,
+            log: Log::with_capacity(nt / 2),
+            stats: Stats {
+                input_vertices: nv,
+                input_triangles: nt,
+                ..Stats::default()
+            },
+            mark: vec![0; nv],
+            generation: 0,
+            scratch: Vec::new(),
+            fan_scratch: Vec::new(),
+            plan_scratch: Vec::new(),
+            cost_scale: None,
+            features: None,
+            attributes: None,
+        };
+        if opts.boundary == Boundary::Locked {
+            for v in 0..nv {
+                s.locked[v] |= s.boundary[v];
+            }
+        }
+        s.stats.boundary_vertices = s.boundary.iter().filter(|&&b| b).count();
+        s.stats.locked_vertices = s.locked.iter().filter(|&&b| b).count();
+        (s, edges, tau)
+    }
+
+    /// Find the non-edge pairs within `tau` (GH97 §3) and record them as
+    /// partners; returns them.
+    pub(super) fn find_partners(&mut self, edges: &[(u32, u32)], tau: f64) -> Vec<(u32, u32)> {
+        let near = pairs::near_pairs(&self.pos, edges, tau);
+        self.stats.near_pairs = near.len();
+        if !near.is_empty() {
+            self.partners = vec![Vec::new(); self.pos.len()];
+        }
+        for &(a, b) in &near {
+            self.partners[a as usize].push(b);
+            self.partners[b as usize].push(a);
+        }
+        near
+    }
+
+    /// [`Schedule::Greedy`]: cost every pair (edges, then τ pairs) with a
+    /// vertex free to move into the heap.
+    pub(super) fn fill_heap(&mut self, mut edges: Vec<(u32, u32)>, near: &[(u32, u32)]) {
+        edges.extend_from_slice(near);
+        let entries: Vec<Entry> = edges
+            .par_iter()
+            .filter(|&&(a, b)| !(self.locked[a as usize] && self.locked[b as usize]))
+            .map(|&(a, b)| self.entry(a, b))
+            .collect();
+        self.heap = QuadHeap::from_vec(entries);
+    }
+
+    pub(super) fn add_features(&mut self, edges: &[(u32, u32)]) {
+        let nv = self.pos.len();
+        let mut f = self
+            .features
+            .take()
+            .unwrap_or_else(|| Features::new(nv, &self.tris));
+        let weight = match self.opts.boundary {
+            Boundary::Weighted(w) => w,
+            Boundary::Locked => crate::simplify::options::DEFAULT_BOUNDARY_WEIGHT,
+        };
+        for &(a, b) in edges {
+            if a as usize >= nv || b as usize >= nv {
+                continue;
+            }
+            let faces: SmallVec<[u32; 2]> = self
+                .vtris
+                .fan(a)
+                .iter()
+                .copied()
+                .filter(|&t| self.tri_alive[t as usize] && self.tris[t as usize].contains(&b))
+                .collect();
+            if faces.is_empty() || !f.add(a, b) {
+                continue;
+            }
+            let (pa, pb) = (dv(self.pos[a as usize]), dv(self.pos[b as usize]));
+            let e = pb - pa;
+            let w = weight
+                * if self.opts.area_weighted {
+                    e.length_squared()
+                } else {
+                    1.0
+                };
+            for t in faces {
+                let c = e.cross(face_normal(&self.pos, &self.tris[t as usize]));
+                let len = c.length();
+                if len > 0.0 && w > 0.0 {
+                    let c = c / len;
+                    let q = Quadric::from_plane(c, -c.dot(pa), w);
+                    let q = Quadric { weight: 0.0, ..q };
+                    self.quadric[a as usize] += q;
+                    self.quadric[b as usize] += q;
+                }
+            }
+        }
+        self.features = Some(f);
+    }
+}
+
+/// Every vertex's quadric, border flag and lock flag, from its own fan
+/// (in parallel): border and non-manifold edges, fans, and its quadric.
+fn classify_all(
+    mesh: &Mesh,
+    vtris: &Fans,
+    opts: &SimplifyOptions,
+) -> (Vec<Quadric>, Vec<bool>, Vec<bool>) {
+    let nv = mesh.positions.len();
+    let boundary_weight = match opts.boundary {
+        Boundary::Weighted(w) => w,
+        Boundary::Locked => 0.0,
+    };
+    // Each face's plane once, not once per corner (the same sums, a
+    // third of the square roots and divisions).
+    let planes: Vec<Plane> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| face_plane(&mesh.positions, t, opts.area_weighted))
+        .collect();
+    let (quadric, (boundary, locked)): (Vec<Quadric>, (Vec<bool>, Vec<bool>)) = (0..nv as u32)
+        .into_par_iter()
+        .map(|v| {
+            let i = classify_vertex(mesh, &planes, vtris.fan(v), v, opts, boundary_weight);
+            (i.quadric, (i.boundary, i.locked))
+        })
+        .unzip();
+    (quadric, boundary, locked)
+}
+
+/// Every edge `(a, b)`, `a < b`, once, sorted.
+fn sorted_edges(mesh: &Mesh, vtris: &Fans) -> Vec<(u32, u32)> {
+    (0..mesh.positions.len() as u32)
+        .into_par_iter()
+        .flat_map_iter(|v| {
+            let mut nb: SmallVec<[u32; 32]> = SmallVec::new();
+            for &t in vtris.fan(v) {
+                nb.extend(
+                    mesh.triangles[t as usize]
+                        .iter()
+                        .copied()
+                        .filter(|&x| x > v),
+                );
+            }
+            nb.sort_unstable();
+            nb.dedup();
+            nb.into_iter().map(move |x| (v, x))
+        })
+        .collect()
+}
+
+/// One vertex's classification and quadric (`Simplifier::new`).
+struct VertexInfo {
+    quadric: Quadric,
+    /// On an open border edge.
+    boundary: bool,
+    /// On a non-manifold edge, or where several fans meet.
+    locked: bool,
+}
+
+/// Classify `v` from its fan `ts`: each edge `(v, x)` is a border (one
+/// use), interior (one use in each direction) or non-manifold (anything
+/// else: locked); interior edges join the fan's triangles, and more than
+/// one fan locks `v` too. The quadric sums `v`'s face planes and, for each
+/// border edge, the constraint plane through it (GH97 §6.1).
+fn classify_vertex(
+    mesh: &Mesh,
+    planes: &[Plane],
+    ts: &[u32],
+    v: u32,
+    opts: &SimplifyOptions,
+    boundary_weight: f64,
+) -> VertexInfo {
+    let mut quadric = Quadric::default();
+    for &t in ts {
+        let [nx, ny, nz, d, w] = planes[t as usize];
+        if w > 0.0 {
+            quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
+        }
+    }
+    // each triangle's two other corners, in winding order: the edge to the
+    // first leaves v, the edge from the second enters it
+    let others = |t: u32| {
+        let [a, b, c] = mesh.triangles[t as usize];
+        if a == v {
+            (b, c)
+        } else if b == v {
+            (c, a)
+        } else {
+            (a, b)
+        }
+    };
+    if ts.len() <= DISK_MAX {
+        let (mut leave, mut enter) = ([u32::MAX; DISK_MAX], [u32::MAX; DISK_MAX]);
+        for (i, &t) in ts.iter().enumerate() {
+            (leave[i], enter[i]) = others(t);
+        }
+        if closed_disk(&leave, &enter, ts.len()) {
+            // the usual interior vertex: no border, one fan
+            return VertexInfo {
+                quadric,
+                boundary: false,
+                locked: false,
+            };
+        }
+    }
+    // neighbour << 32 | (1 = edge leaves v) << 31 | fan slot: one integer
+    // per use sorts as the tuple (neighbour, direction, slot) would
+    let mut uses: SmallVec<[u64; 32]> = SmallVec::new();
+    let edge_use =
+        |x: u32, leaves: u64, slot: usize| u64::from(x) << 32 | leaves << 31 | slot as u64;
+    for (i, &t) in ts.iter().enumerate() {
+        let (l, e) = others(t);
+        uses.push(edge_use(l, 1, i));
+        uses.push(edge_use(e, 0, i));
+    }
+    uses.sort_unstable();
+    let mut parent: SmallVec<[u32; 16]> = (0..ts.len() as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let (mut boundary, mut locked) = (false, false);
+    let neighbour = |u: u64| (u >> 32) as u32;
+    let leaves = |u: u64| u >> 31 & 1;
+    let slot = |u: u64| (u & 0x7fff_ffff) as u32;
+    for run in uses.chunk_by(|&a, &b| neighbour(a) == neighbour(b)) {
+        match *run {
+            [u] => {
+                let (x, s) = (neighbour(u), slot(u));
+                boundary = true;
+                if boundary_weight > 0.0 {
+                    let t = mesh.triangles[ts[s as usize] as usize];
+                    let (pa, pb) = (
+                        dv(mesh.positions[v as usize]),
+                        dv(mesh.positions[x as usize]),
+                    );
+                    let e = pb - pa;
+                    let c = e.cross(face_normal(&mesh.positions, &t));
+                    let len = c.length();
+                    if len > 0.0 {
+                        let c = c / len;
+                        let w = boundary_weight
+                            * if opts.area_weighted {
+                                e.length_squared()
+                            } else {
+                                1.0
+                            };
+                        // constraint planes shape the cost, not the
+                        // mean-distance normalisation
+                        quadric += Quadric {
+                            weight: 0.0,
+                            ..Quadric::from_plane(c, -c.dot(pa), w)
+                        };
+                    }
+                }
+            }
+            [a, b] if leaves(a) != leaves(b) => {
+                let (ra, rb) = (root(&mut parent, slot(a)), root(&mut parent, slot(b)));
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+            _ => locked = true,
+        }
+    }
+    if !locked {
+        let fans = (0..ts.len() as u32)
+            .filter(|&i| root(&mut parent, i) == i)
+            .count();
+        locked = fans > 1;
+    }
+    VertexInfo {
+        quadric,
+        boundary,
+        locked,
+    }
+}
+
+/// Fans up to this size are tried with [`closed_disk`] first.
+const DISK_MAX: usize = 16;
+
+/// Whether the first `d` triangles of a fan, triangle `i` leaving `v`
+/// towards `leave[i]` and entering it from `enter[i]` (the rest of both
+/// arrays `u32::MAX`), make one closed disk: each neighbour left once and
+/// entered once (so every edge is interior), and "the triangle entering
+/// from where triangle `i` leaves to" is one cycle through all `d` (one
+/// fan). The general path of `classify_vertex` (sorting the edge uses)
+/// gives the same answer; this is the quick one for the usual vertex, and
+/// `false` leaves the vertex to the general path.
+fn closed_disk(leave: &[u32; DISK_MAX], enter: &[u32; DISK_MAX], d: usize) -> bool {
+    if d < 2 {
+        return false;
+    }
+    // next[i]: the (sum of the) triangles entering from leave[i], and how
+    // many there are; without branches, so that it vectorises
+    let mut next = [0u32; DISK_MAX];
+    let mut single = true;
+    for i in 0..d {
+        let (mut count, mut at) = (0u32, 0u32);
+        for (j, &e) in enter.iter().enumerate() {
+            let hit = u32::from(e == leave[i]);
+            count += hit;
+            at += hit * j as u32;
+        }
+        single &= count == 1;
+        next[i] = at;
+    }
+    if !single {
+        return false;
+    }
+    // one entering triangle each: `next` is a function on 0..d, and a
+    // cycle through all d from 0 makes it a bijection (leaves distinct,
+    // and with one match each, enters distinct too)
+    let mut i = 0;
+    for _ in 1..d {
+        i = next[i] as usize;
+        if i == 0 {
+            return false;
+        }
+    }
+    next[i] == 0
+}
+
+/// A face's plane `[n.x, n.y, n.z, d, weight]` (unit normal, `n·x + d =
+/// 0`), weight 0 when the face has no area.
+type Plane = [f64; 5];
+
+/// The plane of triangle `t`, weighted by its area or 1.
+fn face_plane(positions: &[[f32; 3]], t: &[u32; 3], area_weighted: bool) -> Plane {
+    let [p0, p1, p2] = t.map(|x| dv(positions[x as usize]));
+    let n = (p1 - p0).cross(p2 - p0);
+    let len = n.length();
+    if len > 0.0 {
+        let unit = n / len;
+        let w = if area_weighted { 0.5 * len } else { 1.0 };
+        [unit.x, unit.y, unit.z, -unit.dot(p0), w]
+    } else {
+        [0.0; 5]
+    }
+}
+
+pub(super) fn face_normal(positions: &[[f32; 3]], t: &[u32; 3]) -> DVec3 {
+    let [p0, p1, p2] = t.map(|v| dv(positions[v as usize]));
+    (p1 - p0).cross(p2 - p0).normalize_or_zero()
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A fan around vertex 0 as `(leave, enter)` per triangle: kind 0 a
+    /// closed disk, 1 two disks on distinct neighbours, 2 a disk with one
+    /// triangle turned over, 3 an open fan (a border), 4 random corners
+    /// from a few neighbours; then shuffled.
+    fn fan(kind: u8, d: usize, seed: u64) -> Vec<(u32, u32)> {
+        let mut rng = seed | 1;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let ring = |n: usize, base: u32| -> Vec<(u32, u32)> {
+            (0..n as u32)
+                .map(|i| (base + i, base + (i + 1) % n as u32))
+                .collect()
+        };
+        let mut f = match kind {
+            0 => ring(d, 1),
+            1 => [ring(d.max(4) / 2, 1), ring(d.max(4) - d.max(4) / 2, 100)].concat(),
+            2 => {
+                let mut f = ring(d, 1);
+                let (l, e) = f[0];
+                f[0] = (e, l);
+                f
+            }
+            3 => ring(d + 1, 1)[..d].to_vec(),
+            _ => (0..d)
+                .map(|_| {
+                    let l = 1 + (next() % 5) as u32;
+                    (l, 1 + (l + (next() % 4) as u32) % 5)
+                })
+                .collect(),
+        };
+        for i in (1..f.len()).rev() {
+            f.swap(i, (next() % (i as u64 + 1)) as usize);
+        }
+        f
+    }
+
+    /// What a closed disk is, by counting: every neighbour left once and
+    /// entered once, and the triangles joined across shared edges are one
+    /// component.
+    fn is_closed_disk(f: &[(u32, u32)]) -> bool {
+        let n = |x: u32, side: fn(&(u32, u32)) -> u32| f.iter().filter(|t| side(t) == x).count();
+        let edges_ok = f.iter().all(|&(l, e)| {
+            n(l, |t| t.0) == 1 && n(l, |t| t.1) == 1 && n(e, |t| t.0) == 1 && n(e, |t| t.1) == 1
+        });
+        let mut comp: Vec<usize> = (0..f.len()).collect();
+        for _ in 0..f.len() {
+            for i in 0..f.len() {
+                for j in 0..f.len() {
+                    if f[i].0 == f[j].1 {
+                        let m = comp[i].min(comp[j]);
+                        (comp[i], comp[j]) = (m, m);
+                    }
+                }
+            }
+        }
+        edges_ok && f.len() >= 2 && comp.iter().all(|&c| c == 0)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// `closed_disk` is the quick path of `classify_vertex`: it must say
+        /// "closed disk" exactly when the fan is one.
+        #[test]
+        fn closed_disk_is_exactly_a_closed_disk(kind in 0u8..5, d in 1usize..=DISK_MAX, seed in any::<u64>()) {
+            let f = fan(kind, d, seed);
+            prop_assume!(f.len() <= DISK_MAX);
+            let (mut leave, mut enter) = ([u32::MAX; DISK_MAX], [u32::MAX; DISK_MAX]);
+            for (i, &(l, e)) in f.iter().enumerate() {
+                (leave[i], enter[i]) = (l, e);
+            }
+            prop_assert_eq!(closed_disk(&leave, &enter, f.len()), is_closed_disk(&f), "{:?}", f);
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! What a simplification did and why it stopped: counts, rejections by
+//! reason, time per phase.
+
+use super::legality::Rejected;
+use std::time::Duration;
+
+/// Rejections counted by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rejections {
+    pub locked: usize,
+    pub link: usize,
+    pub boundary_pinch: usize,
+    pub flip: usize,
+    pub degenerate: usize,
+    pub duplicate: usize,
+    pub error: usize,
+    pub feature: usize,
+}
+
+impl Rejections {
+    pub(super) fn count(&mut self, r: Rejected) {
+        *match r {
+            Rejected::Locked => &mut self.locked,
+            Rejected::Link => &mut self.link,
+            Rejected::BoundaryPinch => &mut self.boundary_pinch,
+            Rejected::Flip => &mut self.flip,
+            Rejected::Degenerate => &mut self.degenerate,
+            Rejected::Duplicate => &mut self.duplicate,
+            Rejected::Error => &mut self.error,
+            Rejected::Feature => &mut self.feature,
+        } += 1;
+    }
+
+    pub fn total(&self) -> usize {
+        self.locked
+            + self.link
+            + self.boundary_pinch
+            + self.flip
+            + self.degenerate
+            + self.duplicate
+            + self.error
+            + self.feature
+    }
+}
+
+/// Wall time per phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Adjacency, boundary and non-manifold classification, quadrics.
+    pub setup: Duration,
+    /// Edge and τ-pair discovery.
+    pub pairs: Duration,
+    /// Costing and ordering candidates: the initial heap
+    /// ([`Schedule::Greedy`]), or every pass's sorted list
+    /// ([`Schedule::Passes`]).
+    pub heap: Duration,
+    /// The contraction loop (without `heap`).
+    pub collapse: Duration,
+    /// Renumbering the log into the progressive mesh.
+    pub log: Duration,
+}
+
+/// What a simplification did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stats {
+    pub input_vertices: usize,
+    pub input_triangles: usize,
+    pub output_vertices: usize,
+    pub output_triangles: usize,
+    pub collapses: usize,
+    /// Passes made ([`Schedule::Passes`]; 0 when greedy).
+    pub passes: usize,
+    /// Non-edge pairs within τ at the start.
+    pub near_pairs: usize,
+    pub boundary_vertices: usize,
+    /// Vertices that never move (non-manifold, or boundary with
+    /// `Boundary::Locked`).
+    pub locked_vertices: usize,
+    pub rejected: Rejections,
+    pub time: PhaseTimes,
+}
+
+/// Why the loop stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// The triangle target was reached.
+    Target,
+    /// Every remaining candidate's error exceeds `max_error`.
+    MaxError,
+    /// No legal candidate is left (all locked or every contraction
+    /// illegal) before the target: the stats say why.
+    Exhausted,
+}
+
+/// A read-only view of the simplifier's current mesh, in the welded input's
+/// numbering (for tests and debugging).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    /// All vertices' current positions (removed ones keep their last).
+    pub positions: Vec<[f32; 3]>,
+    /// `(input triangle id, corners)` of every live triangle, by id.
+    pub triangles: Vec<(u32, [u32; 3])>,
+}
