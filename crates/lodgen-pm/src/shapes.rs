@@ -1,6 +1,11 @@
 //! Small meshes generated in code, for tests, examples and benchmarks:
 //! grids, boxes, tetrahedra, icospheres, tori and a noisy torus knot. Pure
 //! functions, deterministic.
+//!
+//! ```
+//! let m = lodgen_pm::shapes::icosphere(1);
+//! assert_eq!(m.triangles.len(), 80);
+//! ```
 
 use crate::mesh::Mesh;
 use std::f64::consts::TAU;

@@ -5,7 +5,6 @@
 //! equals brute force, and replay is exact.
 
 use lodgen_pm::shapes::{grid, icosphere, torus};
-use lodgen_pm::simplify::pairs::{edges, near_pairs, near_pairs_brute_force};
 use lodgen_pm::simplify::FLIP_MIN_COS;
 use lodgen_pm::{
     prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, Tau,
@@ -215,16 +214,6 @@ proptest! {
         });
         let (a, b) = run_and_step(&m, &opts, wedges);
         prop_assert_eq!(a, b);
-    }
-
-    #[test]
-    fn grid_pair_finder_equals_brute_force(
-        pts in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 2..120),
-        tau in 0.0f64..0.6,
-    ) {
-        let tris: Vec<[u32; 3]> = (0..pts.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-        let e = edges(&tris);
-        prop_assert_eq!(near_pairs(&pts, &e, tau), near_pairs_brute_force(&pts, &e, tau));
     }
 }
 

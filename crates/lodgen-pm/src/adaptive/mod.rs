@@ -62,6 +62,16 @@
 //!
 //! Owns [`Method`], [`AdaptiveOptions`], the classification and the sweep
 //! engine. Does no I/O and never prints.
+//!
+//! ```
+//! use lodgen_pm::{shapes, simplify_method, AdaptiveOptions, Method, SimplifyOptions};
+//! let m = shapes::torus(1.0, 0.3, 48, 24);
+//! let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.5);
+//! let out = simplify_method(&m.positions, &m.indices(), Method::Edge, &opts, &AdaptiveOptions::DEFAULT)
+//!     .unwrap();
+//! assert!(out.report.sweeps > 0);
+//! assert!(out.simplified.pm.base.triangles.len() < m.triangles.len());
+//! ```
 
 mod curvature;
 mod options;
@@ -75,7 +85,7 @@ pub use options::{
 };
 
 use crate::mesh::{prepare, MeshError};
-use crate::simplify::options::SimplifyOptions;
+use crate::simplify::SimplifyOptions;
 use crate::simplify::{Simplifier, StopReason};
 use crate::Simplified;
 use sweep::Engine;

@@ -129,24 +129,29 @@ pub struct AdaptiveOptions {
 }
 
 impl AdaptiveOptions {
+    /// The paper's settings: k = 3, mean + 2σ, fixed threshold, hybrid weight 4.
     pub const DEFAULT: AdaptiveOptions = AdaptiveOptions {
         k_ring: DEFAULT_K_RING,
         threshold: Threshold::Sigma(DEFAULT_SIGMA),
         reclassify: Reclassify::FixedThreshold,
         hybrid_weight: DEFAULT_HYBRID_WEIGHT,
     };
+    /// Umbrella depth for the region normal (≥ 1).
     pub fn with_k_ring(mut self, k: usize) -> Self {
         self.k_ring = k;
         self
     }
+    /// How θ is split into low and high curvature.
     pub fn with_threshold(mut self, t: Threshold) -> Self {
         self.threshold = t;
         self
     }
+    /// Whether the threshold is recomputed every sweep.
     pub fn with_reclassify(mut self, r: Reclassify) -> Self {
         self.reclassify = r;
         self
     }
+    /// The curvature weight `w` of [`Method::QemCurvature`].
     pub fn with_hybrid_weight(mut self, w: f64) -> Self {
         self.hybrid_weight = w;
         self
@@ -199,15 +204,18 @@ pub struct Repairs {
 }
 
 impl Repairs {
+    /// All rollbacks, whatever the defect.
     pub fn total(&self) -> usize {
         self.spikes + self.pyramids + self.reversed
     }
 }
 
-/// What a curvature method did, beyond the core [`Stats`].
+/// What a curvature method did, beyond the core [`Stats`](crate::Stats).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveReport {
+    /// The method that ran.
     pub method: Method,
+    /// Why it stopped.
     pub stop: AdaptiveStop,
     /// Classify → decimate sweeps run (0 for the QEM methods).
     pub sweeps: usize,
@@ -222,7 +230,9 @@ pub struct AdaptiveReport {
     /// above the threshold (high curvature, locked), and the candidate
     /// triangles the operator was tried on (0 for the QEM methods).
     pub last_interior: usize,
+    /// (see `last_interior`)
     pub last_high: usize,
+    /// (see `last_interior`)
     pub last_candidates: usize,
     /// Vertices that never move: border (Algorithm 2) and non-manifold.
     pub fixed_vertices: usize,
@@ -236,6 +246,8 @@ pub struct AdaptiveReport {
 /// [`crate::simplify()`]'s) and the curvature report.
 #[derive(Clone, Debug)]
 pub struct Adaptive {
+    /// The progressive mesh, maps and core statistics.
     pub simplified: Simplified,
+    /// What the curvature method did.
     pub report: AdaptiveReport,
 }

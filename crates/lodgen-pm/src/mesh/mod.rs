@@ -4,6 +4,24 @@
 //! vertices, degenerate and duplicate triangles.
 //!
 //! Owns [`Mesh`], [`Prepared`], [`MeshError`]. Never panics on user input.
+//!
+//! ```
+//! use lodgen_pm::{prepare, MeshError};
+//! // two triangles sharing an edge, its two corners given twice
+//! let positions = [
+//!     [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
+//!     [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0],
+//! ];
+//! let p = prepare(&positions, &[0, 1, 2, 3, 4, 5]).unwrap();
+//! assert_eq!(p.mesh.positions.len(), 4);
+//! assert_eq!(p.stats.welded_vertices, 2);
+//! assert_eq!(p.vertex_map, [0, 1, 2, 1, 3, 2]);
+//! // user input never panics: a typed error names the place
+//! assert!(matches!(
+//!     prepare(&positions, &[0, 1, 9]),
+//!     Err(MeshError::IndexOutOfRange { triangle: 0, index: 9, .. })
+//! ));
+//! ```
 
 pub(crate) mod adjacency;
 
@@ -13,35 +31,55 @@ use thiserror::Error;
 /// An indexed triangle mesh: `f32` positions, `u32` corner indices.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions.
     pub positions: Vec<[f32; 3]>,
+    /// Counter-clockwise corner indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
 }
 
 /// Why user input was refused.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum MeshError {
+    /// The index list's length is not a multiple of 3.
     #[error("the index count {0} is not a multiple of 3")]
     IndexCount(usize),
+    /// A corner names a vertex that does not exist.
     #[error(
         "triangle {triangle} refers to vertex {index}, but there are only {vertex_count} vertices"
     )]
     IndexOutOfRange {
+        /// The triangle (in input order).
         triangle: usize,
+        /// The index it holds.
         index: u32,
+        /// How many vertices there are.
         vertex_count: usize,
     },
+    /// A vertex that a triangle uses has a NaN or infinite coordinate.
     #[error("vertex {vertex} has a non-finite coordinate {value:?}")]
-    NonFinite { vertex: usize, value: [f32; 3] },
+    NonFinite {
+        /// The vertex (in input order).
+        vertex: usize,
+        /// Its coordinates.
+        value: [f32; 3],
+    },
+    /// No triangle left (the text says after what).
     #[error("the mesh has no triangles{0}")]
     Empty(&'static str),
+    /// More vertices than `u32` indices address.
     #[error("the mesh has {0} vertices; at most 2^32 - 1 are supported")]
     TooLarge(usize),
+    /// More triangles than the log's numbering holds.
     #[error("the mesh has {0} triangles; at most 2^30 - 1 are supported")]
     TooManyTriangles(usize),
+    /// The attribute slice is not `dims` values per vertex.
     #[error("{len} attribute values for {vertex_count} vertices of {dims} components")]
     AttributeCount {
+        /// Values given.
         len: usize,
+        /// Components per vertex.
         dims: usize,
+        /// How many vertices there are.
         vertex_count: usize,
     },
 }
@@ -50,19 +88,23 @@ pub enum MeshError {
 /// maps back to the input.
 #[derive(Clone, Debug, Default)]
 pub struct Prepared {
+    /// The welded, cleaned mesh.
     pub mesh: Mesh,
     /// Input vertex → welded vertex (`u32::MAX` for vertices no kept
     /// triangle uses).
     pub vertex_map: Vec<u32>,
     /// Welded triangle → input triangle.
     pub triangle_map: Vec<u32>,
+    /// What was welded and removed.
     pub stats: PrepareStats,
 }
 
 /// What [`prepare`] removed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PrepareStats {
+    /// Vertices given.
     pub input_vertices: usize,
+    /// Triangles given.
     pub input_triangles: usize,
     /// Vertices merged into another with the identical position.
     pub welded_vertices: usize,

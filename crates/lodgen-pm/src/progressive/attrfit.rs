@@ -50,6 +50,7 @@ pub struct Source<'a> {
     pub triangles: &'a [[u32; 3]],
     /// `dims` values per wedge.
     pub values: &'a [f32],
+    /// Components per wedge.
     pub dims: usize,
 }
 
@@ -57,14 +58,18 @@ pub struct Source<'a> {
 /// input wedge of each corner.
 #[derive(Clone, Copy, Debug)]
 pub struct Level<'a> {
+    /// Positions per level vertex.
     pub positions: &'a [[f32; 3]],
+    /// Triangles as level-vertex triples.
     pub triangles: &'a [[u32; 3]],
+    /// The input wedge of each corner.
     pub wedges: &'a [[u32; 3]],
 }
 
 /// A group of components fitted as one unit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
+    /// Which of the `dims` components.
     pub components: Range<usize>,
     /// Keep each fitted component within the input values it was fitted to
     /// (and its own input value): no extrapolation, so a UV stays within
@@ -77,8 +82,11 @@ pub struct Channel {
 /// for each.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Fitted {
+    /// `(level vertex, wedge)`, sorted.
     pub keys: Vec<(u32, u32)>,
+    /// `dims` values per key.
     pub values: Vec<f32>,
+    /// Components per wedge.
     pub dims: usize,
 }
 

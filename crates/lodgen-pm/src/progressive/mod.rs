@@ -11,9 +11,23 @@
 //!
 //! Owns [`VertexSplit`], [`ProgressiveMesh`], [`Cursor`] and the conversion
 //! from the simplifier's contraction log. No simplification logic here.
+//!
+//! ```
+//! use lodgen_pm::levels::{splits_for, LevelSpec};
+//! use lodgen_pm::{shapes, simplify, SimplifyOptions};
+//! let m = shapes::icosphere(3); // 1,280 triangles
+//! let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.1);
+//! let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
+//! let mut cursor = out.pm.cursor(); // at the base mesh
+//! cursor.seek(splits_for(&out.pm, LevelSpec::Ratio(0.5)));
+//! assert!(cursor.mesh().triangles.len() <= 640);
+//! cursor.seek(out.pm.len()); // every split: the full mesh again
+//! assert_eq!(cursor.mesh().triangles.len(), 1280);
+//! ```
 
 pub mod attrfit;
 pub mod levels;
+#[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
 
 use crate::mesh::Mesh;
@@ -24,7 +38,9 @@ use smallvec::SmallVec;
 /// A triangle corner: `triangles[triangle][slot]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Corner {
+    /// The triangle.
     pub triangle: u32,
+    /// Which of its three corners (0, 1 or 2).
     pub slot: u8,
 }
 
@@ -381,6 +397,7 @@ impl ProgressiveMesh {
         self.splits.len()
     }
 
+    /// No vertex split: the base mesh is the full mesh.
     pub fn is_empty(&self) -> bool {
         self.splits.is_empty()
     }
@@ -471,6 +488,7 @@ impl<'a> Cursor<'a> {
         &self.mesh
     }
 
+    /// The current mesh, taken over.
     pub fn into_mesh(self) -> Mesh {
         self.mesh
     }

@@ -6,7 +6,7 @@ use super::{fv, Plan, Simplifier};
 use crate::mesh::adjacency::FanLookup;
 use crate::progressive::{Contraction, Corner, Removed};
 use crate::simplify::features::WedgeEdits;
-use crate::simplify::options::Schedule;
+use crate::simplify::Schedule;
 
 impl Simplifier {
     /// Contract `v0` into `v1` at `p`, record it, and re-queue `v1`'s pairs.

@@ -4,8 +4,8 @@
 
 use super::{dv, Entry, Simplifier};
 use crate::mesh::adjacency::FanLookup;
-use crate::simplify::options::Placement;
 use crate::simplify::quadric::Quadric;
+use crate::simplify::Placement;
 use glam::DVec3;
 
 impl Simplifier {

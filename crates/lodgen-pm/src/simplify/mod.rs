@@ -9,7 +9,7 @@
 //! | `setup` | classification (border, non-manifold, fans), quadrics, feature edges, τ pairs, the first heap |
 //! | `cost` | a pair's target position and cost (quadric + attribute term, cost scale) |
 //! | `schedule` | which pair next: the greedy heap, or the pass list (costing, bucketing, cost limit) |
-//! | `plan` | the read-only half of a step: placement, `max_error` and [`legality`] |
+//! | `plan` | the read-only half of a step: placement, `max_error` and `legality` |
 //! | `walk` | the batched in-order pass walk (plans in parallel, contractions in order) |
 //! | `contract` | one contraction: fans, features, attributes, log, heap |
 //! | `legality` | link condition, flips, slivers, duplicates ([`Rejected`]) |
@@ -18,23 +18,38 @@
 //! The maths is in `quadric` and `attrquadric`, pair discovery in `pairs`,
 //! the queues in `heap`, seams and hard edges in `features`, the log's final
 //! form in [`crate::progressive`].
+//!
+//! ```
+//! use lodgen_pm::{shapes, Simplifier, SimplifyOptions, StopReason};
+//! let mesh = shapes::icosphere(2); // 320 triangles
+//! let opts = SimplifyOptions::DEFAULT.with_target_triangles(100);
+//! let mut s = Simplifier::new(&mesh, &opts).unwrap();
+//! assert_eq!(s.run(), StopReason::Target);
+//! let (pm, stats) = s.finish();
+//! assert!(pm.base.triangles.len() <= 100);
+//! assert_eq!(stats.collapses, pm.len()); // one vertex split per contraction
+//! ```
 
-pub mod attrquadric;
+pub(crate) mod attrquadric;
 mod contract;
 mod cost;
-pub mod features;
-pub mod heap;
-pub mod legality;
-pub mod options;
-pub mod pairs;
+pub(crate) mod features;
+pub(crate) mod heap;
+pub(crate) mod legality;
+mod options;
+pub(crate) mod pairs;
 mod plan;
-pub mod quadric;
+pub(crate) mod quadric;
 mod schedule;
 mod setup;
-pub mod stats;
+pub(crate) mod stats;
 mod walk;
 
 pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
+pub use options::{
+    Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
+    DEFAULT_PASS_FACTOR,
+};
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
 
 use crate::mesh::adjacency::Fans;
@@ -42,7 +57,6 @@ use crate::mesh::{Mesh, MeshError};
 use crate::progressive::{Log, ProgressiveMesh};
 use crate::simplify::features::{AttributeCost, Features};
 use crate::simplify::heap::{Buckets, QuadHeap};
-use crate::simplify::options::{Schedule, SimplifyOptions};
 use crate::simplify::quadric::Quadric;
 use glam::DVec3;
 use smallvec::SmallVec;
@@ -291,6 +305,7 @@ impl Simplifier {
         self.target
     }
 
+    /// What the loop has done so far.
     pub fn stats(&self) -> &Stats {
         &self.stats
     }

@@ -40,7 +40,11 @@ pub enum Schedule {
     /// skipped once either vertex moved), only the re-ranking waits for the
     /// next pass. Several times faster than `Greedy` and measured as good
     /// (README, "Performance").
-    Passes { factor: f32 },
+    Passes {
+        /// The cost limit, as a multiple of the cost of the pass's
+        /// goal-th pair.
+        factor: f32,
+    },
 }
 
 /// Default error slack of [`Schedule::Passes`]: a pass stops at 1.5× the
@@ -85,6 +89,7 @@ pub struct SimplifyOptions {
 }
 
 impl SimplifyOptions {
+    /// The defaults: see each field.
     pub const DEFAULT: SimplifyOptions = SimplifyOptions {
         target_triangles: None,
         target_ratio: None,
@@ -97,34 +102,42 @@ impl SimplifyOptions {
             factor: DEFAULT_PASS_FACTOR,
         },
     };
+    /// Stop at `n` triangles.
     pub fn with_target_triangles(mut self, n: usize) -> Self {
         self.target_triangles = Some(n);
         self
     }
+    /// Stop at this fraction of the input's triangles.
     pub fn with_target_ratio(mut self, r: f64) -> Self {
         self.target_ratio = Some(r);
         self
     }
+    /// Never contract a pair whose error exceeds `e` (mesh units).
     pub fn with_max_error(mut self, e: f64) -> Self {
         self.max_error = Some(e);
         self
     }
+    /// Also pair vertices closer than τ (GH97 non-edge pairs).
     pub fn with_tau(mut self, t: Tau) -> Self {
         self.tau = t;
         self
     }
+    /// Weight face planes by area.
     pub fn with_area_weighted(mut self, on: bool) -> Self {
         self.area_weighted = on;
         self
     }
+    /// How open borders are treated.
     pub fn with_boundary(mut self, b: Boundary) -> Self {
         self.boundary = b;
         self
     }
+    /// Where a contracted pair's vertex goes.
     pub fn with_placement(mut self, p: Placement) -> Self {
         self.placement = p;
         self
     }
+    /// The contraction order.
     pub fn with_schedule(mut self, s: Schedule) -> Self {
         self.schedule = s;
         self

@@ -9,7 +9,9 @@
 /// at τ = 0.01.
 pub const TAU_SLACK: f64 = 1e-6;
 
-/// Sorted, deduplicated `(a, b)` with `a < b` for every triangle edge.
+/// Sorted, deduplicated `(a, b)` with `a < b` for every triangle edge (the
+/// set-up builds its list from the fans; this is the reference for tests).
+#[cfg(test)]
 pub fn edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
     let mut e: Vec<(u32, u32)> = triangles
         .iter()
@@ -90,6 +92,7 @@ pub fn near_pairs(positions: &[[f32; 3]], edges: &[(u32, u32)], tau: f64) -> Vec
 }
 
 /// The O(n²) reference for [`near_pairs`], for tests.
+#[cfg(test)]
 pub fn near_pairs_brute_force(
     positions: &[[f32; 3]],
     edges: &[(u32, u32)],
@@ -108,4 +111,22 @@ pub fn near_pairs_brute_force(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn grid_pair_finder_equals_brute_force(
+            pts in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 2..120),
+            tau in 0.0f64..0.6,
+        ) {
+            let tris: Vec<[u32; 3]> = (0..pts.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+            let e = edges(&tris);
+            prop_assert_eq!(near_pairs(&pts, &e, tau), near_pairs_brute_force(&pts, &e, tau));
+        }
+    }
 }

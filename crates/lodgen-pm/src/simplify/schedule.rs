@@ -6,8 +6,8 @@
 use super::{dv, Entry, PassEntry, Rejected, Simplifier, StopReason};
 use crate::mesh::adjacency::FanLookup;
 use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
-use crate::simplify::options::{Placement, Schedule};
 use crate::simplify::quadric::{CostLanes, LANES};
+use crate::simplify::{Placement, Schedule};
 use rayon::prelude::*;
 use std::time::Instant;
 

@@ -9,9 +9,9 @@ use crate::mesh::Mesh;
 use crate::progressive::Log;
 use crate::simplify::features::Features;
 use crate::simplify::heap::QuadHeap;
-use crate::simplify::options::{Boundary, Schedule, SimplifyOptions};
 use crate::simplify::pairs;
 use crate::simplify::quadric::Quadric;
+use crate::simplify::{Boundary, Schedule, SimplifyOptions};
 use glam::DVec3;
 use rayon::prelude::*;
 use smallvec::SmallVec;
@@ -119,7 +119,7 @@ impl Simplifier {
             .unwrap_or_else(|| Features::new(nv, &self.tris));
         let weight = match self.opts.boundary {
             Boundary::Weighted(w) => w,
-            Boundary::Locked => crate::simplify::options::DEFAULT_BOUNDARY_WEIGHT,
+            Boundary::Locked => crate::simplify::DEFAULT_BOUNDARY_WEIGHT,
         };
         for &(a, b) in edges {
             if a as usize >= nv || b as usize >= nv {

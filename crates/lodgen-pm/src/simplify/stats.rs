@@ -7,13 +7,21 @@ use std::time::Duration;
 /// Rejections counted by reason.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Rejections {
+    /// [`Rejected::Locked`].
     pub locked: usize,
+    /// [`Rejected::Link`].
     pub link: usize,
+    /// [`Rejected::BoundaryPinch`].
     pub boundary_pinch: usize,
+    /// [`Rejected::Flip`].
     pub flip: usize,
+    /// [`Rejected::Degenerate`].
     pub degenerate: usize,
+    /// [`Rejected::Duplicate`].
     pub duplicate: usize,
+    /// [`Rejected::Error`].
     pub error: usize,
+    /// [`Rejected::Feature`].
     pub feature: usize,
 }
 
@@ -31,6 +39,7 @@ impl Rejections {
         } += 1;
     }
 
+    /// All rejections.
     pub fn total(&self) -> usize {
         self.locked
             + self.link
@@ -51,8 +60,8 @@ pub struct PhaseTimes {
     /// Edge and τ-pair discovery.
     pub pairs: Duration,
     /// Costing and ordering candidates: the initial heap
-    /// ([`Schedule::Greedy`]), or every pass's sorted list
-    /// ([`Schedule::Passes`]).
+    /// ([`Schedule::Greedy`](super::Schedule::Greedy)), or every pass's sorted list
+    /// ([`Schedule::Passes`](super::Schedule::Passes)).
     pub heap: Duration,
     /// The contraction loop (without `heap`).
     pub collapse: Duration,
@@ -63,20 +72,28 @@ pub struct PhaseTimes {
 /// What a simplification did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
+    /// Vertices of the (welded) input.
     pub input_vertices: usize,
+    /// Triangles of the (welded) input.
     pub input_triangles: usize,
+    /// Vertices of the base mesh.
     pub output_vertices: usize,
+    /// Triangles of the base mesh.
     pub output_triangles: usize,
+    /// Contractions made (vertex splits in the log).
     pub collapses: usize,
-    /// Passes made ([`Schedule::Passes`]; 0 when greedy).
+    /// Passes made ([`Schedule::Passes`](super::Schedule::Passes); 0 when greedy).
     pub passes: usize,
     /// Non-edge pairs within τ at the start.
     pub near_pairs: usize,
+    /// Vertices on an open border.
     pub boundary_vertices: usize,
     /// Vertices that never move (non-manifold, or boundary with
     /// `Boundary::Locked`).
     pub locked_vertices: usize,
+    /// Candidates refused, by reason.
     pub rejected: Rejections,
+    /// Wall time per phase.
     pub time: PhaseTimes,
 }
 
