@@ -30,7 +30,7 @@
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
-use lodgen_pm::metric::{self, ErrorReport, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{self, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::{
     simplify_adaptive, simplify_with_wedges, AdaptiveOptions, Mesh, MeshError, Method, Simplified,
     SimplifyOptions,
@@ -533,14 +533,16 @@ pub fn build_one(
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();
+    // The original's hierarchy and sample order, built once for every level.
+    let reference = Reference::new(MeshRef::new(&full.positions, &full.triangles))
+        .map_err(|e| measure_err(MeasureError::A(e)))?;
+    let measure_mesh = |m: &lodgen_pm::Mesh, mopts: &MeasureOptions| {
+        reference
+            .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
+            .map_err(|e| measure_err(MeasureError::B(e)))
+    };
     let measure_at = |k: usize, mopts: &MeasureOptions| -> Result<ErrorReport, BuildError> {
-        let m = pm.mesh_at_splits(k);
-        metric::measure(
-            MeshRef::new(&full.positions, &full.triangles),
-            MeshRef::new(&m.positions, &m.triangles),
-            mopts,
-        )
-        .map_err(measure_err)
+        measure_mesh(&pm.mesh_at_splits(k), mopts)
     };
 
     // Split counts, finest first, without repeats.
@@ -600,12 +602,7 @@ pub fn build_one(
         });
         cursor.seek(k);
         let m = cursor.mesh();
-        let report = metric::measure(
-            MeshRef::new(&full.positions, &full.triangles),
-            MeshRef::new(&m.positions, &m.triangles),
-            &opts.measure,
-        )
-        .map_err(measure_err)?;
+        let report = measure_mesh(m, &opts.measure)?;
         // a level below the input gets fitted values (module docs)
         let fitted = match (&fit_source, cursor.wedges()) {
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),

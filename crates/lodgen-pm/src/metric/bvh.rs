@@ -1,41 +1,51 @@
-//! Closest-point queries against a triangle mesh: a bounding-volume hierarchy over its triangles
-//! and the exact point–triangle distance.
+//! Closest-point queries against a triangle mesh: a bounding-volume hierarchy over its triangles.
 //!
-//! This module owns [`TriangleBvh`] and [`closest_point_on_triangle`]. It reads a [`MeshRef`]
-//! once, copies the triangles into leaf order and never looks at the input again; it knows
-//! nothing about sampling or error statistics (that is [`crate::metric::measure()`]).
+//! This module owns [`TriangleBvh`]. It reads a [`MeshRef`] once, copies the triangles into leaf
+//! order and never looks at the input again; it knows nothing about sampling or error statistics
+//! (that is [`super::measure()`]). The exact point–triangle distance,
+//! [`closest_point_on_triangle`], is re-exported from the metric's geometry module.
 //!
-//! - Point–triangle distance: C. Ericson, *Real-Time Collision Detection*, Morgan Kaufmann
-//!   2005, §5.1.5 "Closest point on triangle to point" (Voronoi-region tests, no square roots),
-//!   made robust for zero-area triangles by falling back to the three edges.
 //! - Build: binned surface-area heuristic, I. Wald, "On fast construction of SAH-based bounding
 //!   volume hierarchies", IEEE Symposium on Interactive Ray Tracing 2007 (16 bins along the
-//!   axis of largest centroid spread, object-median fallback when every centroid coincides).
-//! - Query: depth-first, nearer child first, a subtree is skipped when its box is no closer than
-//!   the best triangle found so far (branch and bound).
+//!   axis of largest centroid spread, object-median fallback when every centroid coincides),
+//!   into a binary tree, then collapsed into a 4-wide tree (each node holds the boxes of up to
+//!   four children, structure of arrays; the child of largest area is opened first, as in
+//!   H. Dammertz, J. Hanika, A. Keller, "Shallow bounding volume hierarchies for fast SIMD ray
+//!   tracing of incoherent rays", EGSR 2008).
+//! - Query: depth-first branch and bound, nearer children first, a subtree skipped when its box
+//!   is no closer than the best triangle found so far. The four box distances of a node are
+//!   computed side by side in `f32` (one SIMD lane each); they are only used to *skip* boxes,
+//!   against a bound widened by more than their rounding error, so a query visits every box
+//!   that could hold the closest point and its answer is exactly the brute-force minimum over
+//!   triangles of the `f64` point–triangle distance.
 //!
 //! Bounds are stored as `f32`; since the input positions are `f32`, the min/max of a set of them
-//! is exact, so the boxes are tight and conservative. All distance arithmetic is `f64`.
+//! is exact, so the boxes are tight and conservative. Triangle distances are `f64`.
 
-use crate::metric::{MeshError, MeshRef};
+use super::triangle::widen;
+pub use super::triangle::{closest_point_on_triangle, distance_squared};
+use super::{MeshError, MeshRef};
 
-/// Triangles per leaf at most. Closest-point queries evaluate every triangle of a visited leaf,
-/// so leaves stay small; 4 is the usual sweet spot (one more box test costs about as much as
-/// one triangle test, and 1-triangle leaves double the node count for no gain).
-const MAX_LEAF: usize = 4;
+/// Triangles per leaf at most. Each child of a node has its own box, so small leaves mean a
+/// box test (4 lanes at once) before most triangle tests.
+const MAX_LEAF: usize = 2;
 
 /// Bins for the binned SAH. Wald (2007) bins into a small fixed number of buckets (16 there)
 /// and finds the trees close to a full SAH sweep at a fraction of the build time.
 const BINS: usize = 16;
 
 /// Below this depth the build splits by SAH; deeper, by object median, which halves the count
-/// at every level. So the depth never exceeds `MAX_SAH_DEPTH + 32` (for < 2³² triangles) and a
-/// query's stack (at most depth + 1 entries) fits in [`STACK`] entries without allocating. SAH
-/// trees of real meshes are far shallower (the bunny's is about 20 levels).
+/// at every level. So the binary depth never exceeds `MAX_SAH_DEPTH + 32` (for < 2³²
+/// triangles); the 4-wide tree is no deeper, and a query's stack (at most 3 entries per level,
+/// plus one) fits in [`STACK`] entries without allocating. SAH trees of real meshes are far
+/// shallower (the bunny's binary tree is about 20 levels).
 const MAX_SAH_DEPTH: usize = 48;
 
 /// Traversal stack size; see [`MAX_SAH_DEPTH`].
-const STACK: usize = MAX_SAH_DEPTH + 34;
+const STACK: usize = 3 * (MAX_SAH_DEPTH + 33) + 1;
+
+/// `count` of a child that does not exist.
+const EMPTY: u8 = u8::MAX;
 
 /// A node of the binary tree during the build: an axis-aligned box and either two children
 /// (`count == 0`, children at `first` and `first + 1`) or a leaf (`count > 0`, triangle slots
@@ -48,17 +58,18 @@ struct BuildNode {
     count: u32,
 }
 
-/// An internal node as queried: the boxes of both children, stored in the parent (structure
-/// of arrays, one cache line), so a visit is one memory load and both child distances are
-/// computed side by side. Child `c` is a leaf with slots `first[c]..first[c] + count[c]` when
-/// `count[c] > 0`, else the internal node `first[c]`.
+/// An internal node as queried: the boxes of its (up to) four children, structure of arrays
+/// (`lo[axis][child]`), so the four box distances are one SIMD computation. Child `c` is a leaf
+/// with slots `first[c]..first[c] + count[c]` when `0 < count[c] < EMPTY`, the internal node
+/// `first[c]` when `count[c] == 0`, and absent when `count[c] == EMPTY` (its box is empty:
+/// `lo = +∞`, `hi = −∞`, so its distance is infinite).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Node {
-    lo: [[f32; 2]; 3],
-    hi: [[f32; 2]; 3],
-    first: [u32; 2],
-    count: [u32; 2],
+    lo: [[f32; 4]; 3],
+    hi: [[f32; 4]; 3],
+    first: [u32; 4],
+    count: [u8; 4],
 }
 
 /// A bounding-volume hierarchy over the triangles of one mesh, for exact closest-point queries.
@@ -70,13 +81,15 @@ pub struct TriangleBvh {
     /// Box of the whole mesh.
     root_lo: [f32; 3],
     root_hi: [f32; 3],
+    /// Largest absolute coordinate of the root box: the scale of the `f32` rounding error.
+    magnitude: f64,
     /// The root as a child reference (see [`Node`]): a leaf when the mesh has at most
     /// [`MAX_LEAF`] triangles, else internal node 0.
     root_first: u32,
     root_count: u32,
     /// Internal nodes, depth first.
     nodes: Vec<Node>,
-    /// Levels of the tree (0 without triangles, 1 when the root is a leaf).
+    /// Levels of the binary tree (0 without triangles, 1 when the root is a leaf).
     depth: usize,
     /// Triangle corners in leaf order.
     tris: Vec<[[f32; 3]; 3]>,
@@ -84,131 +97,17 @@ pub struct TriangleBvh {
     ids: Vec<u32>,
 }
 
-/// `a - b`
+/// `f64::max` without its NaN handling (one `maxsd`); inputs are finite.
 #[inline(always)]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+fn max64(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
 }
 
-#[inline(always)]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `a + t * d`
-#[inline(always)]
-fn along(a: [f64; 3], d: [f64; 3], t: f64) -> [f64; 3] {
-    [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]]
-}
-
-/// Squared Euclidean distance between two points.
-#[inline(always)]
-pub fn distance_squared(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let d = sub(a, b);
-    dot(d, d)
-}
-
-#[inline(always)]
-fn widen(p: [f32; 3]) -> [f64; 3] {
-    [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
-}
-
-/// Closest point to `p` on the segment `a`–`b` (a point when `a == b`).
-#[inline]
-fn closest_point_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    let ab = sub(b, a);
-    let len2 = dot(ab, ab);
-    if len2 <= 0.0 {
-        return a;
-    }
-    let t = (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0);
-    along(a, ab, t)
-}
-
-/// Closest point to `p` on whichever of the three edges is nearest; used for zero-area triangles,
-/// where the barycentric solve of the face region divides by zero.
-#[cold]
-fn closest_point_on_edges(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let mut best = closest_point_on_segment(p, a, b);
-    let mut best_d2 = distance_squared(p, best);
-    for (u, v) in [(b, c), (c, a)] {
-        let q = closest_point_on_segment(p, u, v);
-        let d2 = distance_squared(p, q);
-        if d2 < best_d2 {
-            best = q;
-            best_d2 = d2;
-        }
-    }
-    best
-}
-
-/// The point of triangle `a b c` (the filled triangle, not only its edges) closest to `p`.
-///
-/// Ericson's Voronoi-region walk (*Real-Time Collision Detection* §5.1.5): vertex regions, then
-/// edge regions, then the face, using only dot products. Each edge-region denominator is
-/// mathematically the squared edge length and the face denominator the squared doubled area, so
-/// they vanish only on degenerate triangles; those cases take the exact edge fallback instead of
-/// dividing by zero. Works for any finite input, including all three corners equal.
-#[inline]
-pub fn closest_point_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let ab = sub(b, a);
-    let ac = sub(c, a);
-    let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a; // vertex region A
-    }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b; // vertex region B
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let den = d1 - d3;
-        if den > 0.0 {
-            return along(a, ab, d1 / den); // edge region AB
-        }
-        return closest_point_on_edges(p, a, b, c);
-    }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c; // vertex region C
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let den = d2 - d6;
-        if den > 0.0 {
-            return along(a, ac, d2 / den); // edge region AC
-        }
-        return closest_point_on_edges(p, a, b, c);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let den = (d4 - d3) + (d5 - d6);
-        if den > 0.0 {
-            return along(b, sub(c, b), (d4 - d3) / den); // edge region BC
-        }
-        return closest_point_on_edges(p, a, b, c);
-    }
-    let den = va + vb + vc;
-    if den <= 0.0 || !den.is_finite() {
-        return closest_point_on_edges(p, a, b, c);
-    }
-    let v = vb / den;
-    let w = vc / den;
-    [
-        a[0] + ab[0] * v + ac[0] * w,
-        a[1] + ab[1] * v + ac[1] * w,
-        a[2] + ab[2] * v + ac[2] * w,
-    ] // face region
-}
-
-/// Squared distance from `p` to the box `lo..hi` (0 inside).
+/// Squared distance from `p` to the box `lo..hi` (0 inside), in `f64`.
 #[inline(always)]
 fn box_distance_squared(lo: [f32; 3], hi: [f32; 3], p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
@@ -219,29 +118,35 @@ fn box_distance_squared(lo: [f32; 3], hi: [f32; 3], p: [f64; 3]) -> f64 {
     d2
 }
 
-/// Squared distances from `p` to the boxes of both children of `n`.
+/// Squared distances, in `f32`, from `p` to the boxes of the four children of `n` (infinite for
+/// an absent child). Written lane by lane so that it compiles to packed SIMD.
 #[inline(always)]
-fn child_distances_squared(n: &Node, p: [f64; 3]) -> [f64; 2] {
-    let mut d2 = [0.0; 2];
-    for (k, &pk) in p.iter().enumerate() {
-        for (c, acc) in d2.iter_mut().enumerate() {
-            let d = max64(
-                max64(f64::from(n.lo[k][c]) - pk, pk - f64::from(n.hi[k][c])),
-                0.0,
-            );
-            *acc += d * d;
+fn child_distances_squared(n: &Node, p: [f32; 3]) -> [f32; 4] {
+    let mut acc = [0.0f32; 4];
+    for ((lo, hi), &pk) in n.lo.iter().zip(&n.hi).zip(&p) {
+        for ((a, &l), &h) in acc.iter_mut().zip(lo).zip(hi) {
+            let d = max32(max32(l - pk, pk - h), 0.0);
+            *a += d * d;
         }
     }
-    d2
+    acc
 }
 
-/// `f64::max` without its NaN handling (one `maxsd`); inputs are finite.
-#[inline(always)]
-fn max64(a: f64, b: f64) -> f64 {
-    if a > b {
-        a
+/// Relative size of the slack added to a query's bound before boxes are skipped by their `f32`
+/// distance: the rounding of the query point to `f32` and of the box distance arithmetic
+/// (a few units of 2⁻²⁴ of the largest coordinate involved) stays far below it.
+const SLACK: f64 = 1.0 / (1u64 << 16) as f64;
+
+/// The `f32` value a box's squared distance must exceed to be skipped, for a best squared
+/// distance `best` so far: `(√best + slack)²`, rounded up, infinite when out of `f32` range.
+#[inline]
+fn skip_bound(best: f64, slack: f64) -> f32 {
+    let b = best.sqrt() + slack;
+    let b2 = b * b * (1.0 + SLACK);
+    if b2 < f64::from(f32::MAX) / 4.0 {
+        b2 as f32
     } else {
-        b
+        f32::INFINITY
     }
 }
 
@@ -394,6 +299,7 @@ impl TriangleBvh {
             return TriangleBvh {
                 root_lo: [0.0; 3],
                 root_hi: [0.0; 3],
+                magnitude: 0.0,
                 root_first: 0,
                 root_count: 0,
                 nodes: Vec::new(),
@@ -405,9 +311,14 @@ impl TriangleBvh {
         TriangleBvh {
             root_lo: root.min,
             root_hi: root.max,
+            magnitude: root
+                .min
+                .iter()
+                .chain(&root.max)
+                .fold(0.0, |m, &x| max64(m, f64::from(x).abs())),
             root_first: if root.count > 0 { root.first } else { 0 },
             root_count: root.count,
-            nodes: flatten(&nodes),
+            nodes: collapse(&nodes),
             depth: max_depth,
             tris,
             ids,
@@ -419,8 +330,9 @@ impl TriangleBvh {
         self.ids.len()
     }
 
-    /// Levels of the tree: 0 without triangles, 1 when a single leaf holds them all. At most
-    /// `MAX_SAH_DEPTH + 33`, however the triangles are placed.
+    /// Levels of the binary tree the 4-wide one was collapsed from: 0 without triangles, 1 when
+    /// a single leaf holds them all. At most `MAX_SAH_DEPTH + 33`, however the triangles are
+    /// placed.
     pub fn depth(&self) -> usize {
         self.depth
     }
@@ -428,6 +340,13 @@ impl TriangleBvh {
     /// True when the mesh had no triangles; then every query returns `None`.
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
+    }
+
+    /// Bytes held by the hierarchy (nodes, triangle corners, ids).
+    pub fn heap_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node>()
+            + self.tris.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
+            + self.ids.capacity() * std::mem::size_of::<u32>()
     }
 
     /// The closest point to `p` on the mesh surface: `(squared distance, triangle index, point)`,
@@ -469,32 +388,56 @@ impl TriangleBvh {
         Some(best)
     }
 
-    /// Depth-first branch and bound from internal node 0, nearer child first.
+    /// Depth-first branch and bound from internal node 0, nearer children first.
     #[inline]
     fn search(&self, p: [f64; 3], best: &mut (f64, u32, [f64; 3])) {
-        let mut stack = [(0u32, 0.0f64); STACK];
+        let p32 = p.map(|x| x as f32);
+        let scale = p.iter().fold(self.magnitude, |m, &x| max64(m, x.abs()));
+        let slack = SLACK * scale;
+        let mut bound = skip_bound(best.0, slack);
+        let mut stack = [(0u32, 0.0f32); STACK];
         let mut len = 1;
         while len > 0 {
             len -= 1;
             let (ni, nd2) = stack[len];
-            if nd2 >= best.0 {
+            if nd2 > bound {
                 continue;
             }
             let node = &self.nodes[ni as usize];
-            let d = child_distances_squared(node, p);
-            let (near, far) = if d[0] <= d[1] { (0, 1) } else { (1, 0) };
-            // Internal children go on the stack, the farther first so the nearer is popped
-            // first; leaf children are searched at once, the nearer first.
-            for c in [far, near] {
-                if node.count[c] == 0 && d[c] < best.0 {
+            let d = child_distances_squared(node, p32);
+            // The children within the bound, nearest first (insertion sort of at most 4).
+            let mut order = [0usize; 4];
+            let mut n = 0;
+            for c in 0..4 {
+                // (an absent child's distance is infinite, but so is the bound before the first
+                // triangle is measured)
+                if d[c] <= bound && node.count[c] != EMPTY {
+                    let mut i = n;
+                    while i > 0 && d[order[i - 1]] > d[c] {
+                        order[i] = order[i - 1];
+                        i -= 1;
+                    }
+                    order[i] = c;
+                    n += 1;
+                }
+            }
+            // Internal children go on the stack, the farthest first so the nearest is popped
+            // first; leaf children are searched at once, the nearest first.
+            for &c in order[..n].iter().rev() {
+                if node.count[c] == 0 {
                     debug_assert!(len < STACK, "tree deeper than MAX_SAH_DEPTH allows");
                     stack[len] = (node.first[c], d[c]);
                     len += 1;
                 }
             }
-            for c in [near, far] {
-                if node.count[c] > 0 && d[c] < best.0 {
-                    self.test_leaf(p, node.first[c], node.count[c], best);
+            for &c in &order[..n] {
+                let count = node.count[c];
+                if count > 0 && d[c] <= bound {
+                    let before = best.0;
+                    self.test_leaf(p, node.first[c], u32::from(count), best);
+                    if best.0 < before {
+                        bound = skip_bound(best.0, slack);
+                    }
                 }
             }
         }
@@ -514,39 +457,65 @@ impl TriangleBvh {
     }
 }
 
-/// Converts the binary build tree into query nodes (child boxes in the parent), depth first.
-fn flatten(build: &[BuildNode]) -> Vec<Node> {
+/// Collapses the binary build tree into 4-wide query nodes, depth first: each node takes its
+/// two children and keeps opening the internal one of largest area until it has four.
+fn collapse(build: &[BuildNode]) -> Vec<Node> {
     if build[0].count > 0 {
         return Vec::new(); // the root is a leaf
     }
-    let mut nodes: Vec<Node> = Vec::with_capacity(build.len() / 2);
+    let blank = Node {
+        lo: [[f32::INFINITY; 4]; 3],
+        hi: [[f32::NEG_INFINITY; 4]; 3],
+        first: [0; 4],
+        count: [EMPTY; 4],
+    };
+    let mut nodes: Vec<Node> = Vec::with_capacity(build.len() / 3 + 1);
+    nodes.push(blank);
     // (build index of an internal node, its query index)
     let mut work: Vec<(usize, usize)> = vec![(0, 0)];
-    nodes.push(Node {
-        lo: [[0.0; 2]; 3],
-        hi: [[0.0; 2]; 3],
-        first: [0; 2],
-        count: [0; 2],
-    });
+    let area = |i: usize| {
+        let b = &build[i];
+        Aabb {
+            min: b.min,
+            max: b.max,
+        }
+        .half_area()
+    };
     while let Some((bi, ni)) = work.pop() {
-        let l = build[bi].first as usize;
         debug_assert_eq!(build[bi].count, 0);
-        for (c, child) in [l, l + 1].into_iter().enumerate() {
-            let b = &build[child];
-            for k in 0..3 {
-                nodes[ni].lo[k][c] = b.min[k];
-                nodes[ni].hi[k][c] = b.max[k];
+        let l = build[bi].first as usize;
+        let mut kids = [l, l + 1, 0, 0];
+        let mut n = 2;
+        while n < 4 {
+            let open = (0..n)
+                .filter(|&i| build[kids[i]].count == 0)
+                .max_by(|&i, &j| area(kids[i]).total_cmp(&area(kids[j])).then(j.cmp(&i)));
+            let Some(i) = open else { break };
+            let f = build[kids[i]].first as usize;
+            kids.copy_within(i + 1..n, i + 2);
+            kids[i] = f;
+            kids[i + 1] = f + 1;
+            n += 1;
+        }
+        let mut node = blank;
+        for (c, &k) in kids[..n].iter().enumerate() {
+            let b = &build[k];
+            for a in 0..3 {
+                node.lo[a][c] = b.min[a];
+                node.hi[a][c] = b.max[a];
             }
-            nodes[ni].count[c] = b.count;
             if b.count > 0 {
-                nodes[ni].first[c] = b.first;
+                node.first[c] = b.first;
+                node.count[c] = b.count as u8;
             } else {
                 let new = nodes.len();
-                nodes.push(nodes[ni]); // placeholder, overwritten when popped
-                nodes[ni].first[c] = new as u32;
-                work.push((child, new));
+                nodes.push(blank); // placeholder, written when popped
+                node.first[c] = new as u32;
+                node.count[c] = 0;
+                work.push((k, new));
             }
         }
+        nodes[ni] = node;
     }
     nodes
 }

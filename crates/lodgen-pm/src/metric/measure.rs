@@ -3,7 +3,8 @@
 //! This module owns surface sampling, the one-sided and symmetric distance statistics
 //! (Hausdorff, mean, RMS) and their expression as a percentage of the original's bounding-box
 //! diagonal. It takes meshes as plain slices ([`MeshRef`]) so it depends on nothing else in the
-//! core; closest-point queries are [`crate::metric::bvh::TriangleBvh`]'s.
+//! core; closest-point queries are [`TriangleBvh`]'s. To measure several meshes against one
+//! original, [`Reference`] prepares the original once (its hierarchy, its samples' order).
 //!
 //! Method (after Metro: P. Cignoni, C. Rocchini, R. Scopigno, "Metro: measuring error on
 //! simplified surfaces", Computer Graphics Forum 17(2), 1998): the one-sided distance from
@@ -27,8 +28,9 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
-use crate::metric::bvh::TriangleBvh;
-use crate::metric::{MeshError, MeshRef};
+use super::bvh::TriangleBvh;
+use super::triangle::widen;
+use super::{MeshError, MeshRef};
 
 /// [`measure`]'s error: which mesh is invalid and why.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
@@ -204,7 +206,9 @@ impl ErrorReport {
     }
 }
 
-/// Measures A (the original) against B both ways.
+/// Measures A (the original) against B both ways. Same as
+/// `Reference::new(a)?.measure(b, opts)` (with the errors naming the mesh); use a [`Reference`]
+/// to measure several meshes against one A.
 ///
 /// # Errors
 /// [`MeasureError`] naming the mesh when either has an out-of-range index or a non-finite
@@ -216,34 +220,105 @@ pub fn measure(
 ) -> Result<ErrorReport, MeasureError> {
     a.validate().map_err(MeasureError::A)?;
     b.validate().map_err(MeasureError::B)?;
-    let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
     // A→B needs only B's hierarchy, so it runs while A's (usually the larger) is being built.
-    // Different streams for the two directions, so that measuring a mesh against itself does
-    // not sample the same points twice.
-    let (bvh_a, a_to_b) = rayon::join(
-        || TriangleBvh::build_validated(a),
+    let (reference, a_to_b) = rayon::join(
+        || Reference::build_validated(a),
         || {
+            let samples_a = SampleSet::new(a);
             let bvh_b = TriangleBvh::build_validated(b);
-            one_sided_validated(a, &bvh_b, n, opts.vertex_samples, opts.seed)
+            let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
+            measure_from(a, &samples_a, &bvh_b, n, opts.vertex_samples, opts.seed)
         },
     );
-    let b_to_a = one_sided_validated(
-        b,
-        &bvh_a,
-        n,
-        opts.vertex_samples,
-        opts.seed ^ 0xb5ad_4ece_da1c_e2a9,
-    );
+    let b_to_a = reference.b_to_a(b, opts);
     Ok(ErrorReport {
         a_to_b,
         b_to_a,
-        diagonal: a.bbox_diagonal(),
+        diagonal: reference.diagonal,
     })
 }
 
+/// An original mesh A prepared for measuring others against it: its hierarchy (for B→A) and
+/// the Z-order of its triangles and vertices (for A→B), both built once. For the levels of one
+/// LOD chain this saves a hierarchy build and a sort of A per level; the results are those of
+/// [`measure`], bit for bit.
+#[derive(Clone, Debug)]
+pub struct Reference<'a> {
+    mesh: MeshRef<'a>,
+    bvh: TriangleBvh,
+    samples: SampleSet,
+    diagonal: f64,
+}
+
+impl<'a> Reference<'a> {
+    /// Prepares `a`.
+    ///
+    /// # Errors
+    /// [`MeshError`] when `a` has an out-of-range index or a non-finite position.
+    pub fn new(a: MeshRef<'a>) -> Result<Reference<'a>, MeshError> {
+        a.validate()?;
+        Ok(Self::build_validated(a))
+    }
+
+    fn build_validated(a: MeshRef<'a>) -> Reference<'a> {
+        let (bvh, samples) = rayon::join(|| TriangleBvh::build_validated(a), || SampleSet::new(a));
+        Reference {
+            mesh: a,
+            bvh,
+            samples,
+            diagonal: a.bbox_diagonal(),
+        }
+    }
+
+    /// The original's hierarchy.
+    pub fn bvh(&self) -> &TriangleBvh {
+        &self.bvh
+    }
+
+    /// Bounding-box diagonal of the original: the unit of the percentages.
+    pub fn diagonal(&self) -> f64 {
+        self.diagonal
+    }
+
+    /// Measures `b` against the original both ways.
+    ///
+    /// # Errors
+    /// [`MeshError`] when `b` has an out-of-range index or a non-finite position.
+    pub fn measure(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> Result<ErrorReport, MeshError> {
+        b.validate()?;
+        let a = self.mesh;
+        let (a_to_b, b_to_a) = rayon::join(
+            || {
+                let bvh_b = TriangleBvh::build_validated(b);
+                let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
+                measure_from(a, &self.samples, &bvh_b, n, opts.vertex_samples, opts.seed)
+            },
+            || self.b_to_a(b, opts),
+        );
+        Ok(ErrorReport {
+            a_to_b,
+            b_to_a,
+            diagonal: self.diagonal,
+        })
+    }
+
+    /// B→A for a validated `b`. A different random stream than A→B, so that measuring a mesh
+    /// against itself does not sample the same points twice.
+    fn b_to_a(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> Distance {
+        let n = opts.area_sample_count(self.mesh.triangles.len(), b.triangles.len());
+        measure_from(
+            b,
+            &SampleSet::new(b),
+            &self.bvh,
+            n,
+            opts.vertex_samples,
+            opts.seed ^ 0xb5ad_4ece_da1c_e2a9,
+        )
+    }
+}
+
 /// One-sided distance from the points of `from` to the surface in `to`, with
-/// `opts.area_sample_count(from.triangles.len(), to.len())` area samples. Lets a caller that
-/// measures several meshes against one original build the original's hierarchy once.
+/// `opts.area_sample_count(from.triangles.len(), to.len())` area samples.
 ///
 /// # Errors
 /// [`MeshError`] when `from` is invalid.
@@ -254,8 +329,9 @@ pub fn one_sided(
 ) -> Result<Distance, MeshError> {
     from.validate()?;
     let n = opts.area_sample_count(from.triangles.len(), to.len());
-    Ok(one_sided_validated(
+    Ok(measure_from(
         from,
+        &SampleSet::new(from),
         to,
         n,
         opts.vertex_samples,
@@ -346,10 +422,6 @@ fn unit(x: u64) -> f64 {
     (x >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
-fn widen(p: [f32; 3]) -> [f64; 3] {
-    p.map(f64::from)
-}
-
 /// Area of triangle `t` of a validated mesh.
 fn triangle_area(mesh: MeshRef<'_>, t: [u32; 3]) -> f64 {
     let [a, b, c] = t.map(|v| widen(mesh.positions[v as usize]));
@@ -396,12 +468,73 @@ fn z_order(items: &mut [u32], key: impl Fn(u32) -> [f64; 3], lo: [f64; 3], hi: [
     }
 }
 
-/// The one-sided measurement. Triangles and vertices of `from` are visited along a Z-order
-/// curve, so consecutive samples are near each other: the previous answer is a tight first
-/// bound for the next query (and its BVH path is in cache), and stratifying along the curve
-/// spreads the samples evenly over the surface.
-fn one_sided_validated(
+/// Where the samples of a mesh come from: its triangles along a Z-order curve with their
+/// cumulative areas, and the vertices its triangles use, in Z-order. Depends only on the mesh.
+#[derive(Clone, Debug)]
+struct SampleSet {
+    /// Triangle ids along the curve.
+    order: Vec<u32>,
+    /// Cumulative area along `order`, summed sequentially (deterministic).
+    cumulative: Vec<f64>,
+    /// Used vertices along the curve.
+    vertices: Vec<u32>,
+}
+
+impl SampleSet {
+    /// Triangles and vertices of `mesh` (validated) are put along a Z-order curve, so
+    /// consecutive samples are near each other: the previous answer is a tight first bound for
+    /// the next query (and its BVH path is in cache), and stratifying along the curve spreads
+    /// the samples evenly over the surface.
+    fn new(mesh: MeshRef<'_>) -> SampleSet {
+        let nt = mesh.triangles.len();
+        let corners =
+            |t: u32| mesh.triangles[t as usize].map(|v| widen(mesh.positions[v as usize]));
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        let mut used = vec![false; mesh.positions.len()];
+        for t in mesh.triangles {
+            for &v in t {
+                used[v as usize] = true;
+                let p = widen(mesh.positions[v as usize]);
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        let mut order: Vec<u32> = (0..nt as u32).collect();
+        z_order(
+            &mut order,
+            |t| {
+                let [a, b, c] = corners(t);
+                std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)
+            },
+            lo,
+            hi,
+        );
+        let mut cumulative = Vec::with_capacity(nt);
+        let mut total = 0.0f64;
+        for &t in &order {
+            total += triangle_area(mesh, mesh.triangles[t as usize]);
+            cumulative.push(total);
+        }
+        let mut vertices: Vec<u32> = (0..mesh.positions.len() as u32)
+            .filter(|&v| used[v as usize])
+            .collect();
+        z_order(&mut vertices, |v| widen(mesh.positions[v as usize]), lo, hi);
+        SampleSet {
+            order,
+            cumulative,
+            vertices,
+        }
+    }
+}
+
+/// The one-sided measurement from the validated mesh `from`, whose [`SampleSet`] is `set`, to
+/// the surface in `to`.
+fn measure_from(
     from: MeshRef<'_>,
+    set: &SampleSet,
     to: &TriangleBvh,
     area_samples: usize,
     vertex_samples: bool,
@@ -412,36 +545,8 @@ fn one_sided_validated(
     }
     let nt = from.triangles.len();
     let corners = |t: u32| from.triangles[t as usize].map(|v| widen(from.positions[v as usize]));
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    let mut used = vec![false; from.positions.len()];
-    for t in from.triangles {
-        for &v in t {
-            used[v as usize] = true;
-            let p = widen(from.positions[v as usize]);
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
-    let mut order: Vec<u32> = (0..nt as u32).collect();
-    z_order(
-        &mut order,
-        |t| {
-            let [a, b, c] = corners(t);
-            std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)
-        },
-        lo,
-        hi,
-    );
-    // Cumulative areas along the curve, summed sequentially: deterministic.
-    let mut cumulative = Vec::with_capacity(nt);
-    let mut total = 0.0f64;
-    for &t in &order {
-        total += triangle_area(from, from.triangles[t as usize]);
-        cumulative.push(total);
-    }
+    let (order, cumulative) = (&set.order, &set.cumulative);
+    let total = cumulative.last().copied().unwrap_or(0.0);
     let area_samples = if total > 0.0 { area_samples } else { 0 };
     let area = measure_points(area_samples, to, |i, cursor| {
         let k = 3 * i as u64;
@@ -467,10 +572,7 @@ fn one_sided_validated(
         std::array::from_fn(|j| a[j] + r1 * (b[j] - a[j]) + r2 * (c[j] - a[j]))
     });
     let vertices = if vertex_samples {
-        let mut list: Vec<u32> = (0..from.positions.len() as u32)
-            .filter(|&v| used[v as usize])
-            .collect();
-        z_order(&mut list, |v| widen(from.positions[v as usize]), lo, hi);
+        let list = &set.vertices;
         measure_points(list.len(), to, |i, _| {
             widen(from.positions[list[i] as usize])
         })

@@ -1,13 +1,16 @@
 //! The error metric: sampled point–surface distances between two meshes
 //! (Hausdorff, mean, RMS, both directions), over a BVH of triangles.
 //!
-//! * [`bvh`]: closest point on a triangle mesh (a binary BVH, exact
-//!   point–triangle distance); knows nothing about sampling.
+//! * `triangle.rs`: the exact point–triangle distance (pure geometry).
+//! * [`bvh`]: closest point on a triangle mesh (a 4-wide BVH with `f32` SIMD
+//!   box tests, exact `f64` answers); knows nothing about sampling.
 //! * [`measure`](mod@measure): surface sampling and the statistics, as a
-//!   fraction or percentage of the original's bounding-box diagonal.
+//!   fraction or percentage of the original's bounding-box diagonal;
+//!   [`Reference`] prepares an original once for measuring several levels.
 //!
-//! Both take meshes as plain slices ([`MeshRef`], defined here so that
-//! neither depends on the other's types).
+//! All take meshes as plain slices ([`MeshRef`], defined here so that
+//! none depends on another's types); the files depend on each other in
+//! that order only.
 //!
 //! ```
 //! use lodgen_pm::metric::{measure, MeasureOptions, MeshRef};
@@ -22,6 +25,7 @@ use thiserror::Error;
 
 pub mod bvh;
 pub mod measure;
+mod triangle;
 
 pub use bvh::TriangleBvh;
 pub use measure::*;
