@@ -327,18 +327,52 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         .map(|i| table.first(i, |j| weld_key(&positions[j as usize])))
         .collect();
 
-    // Number the used vertices (those on a non-degenerate triangle) along
-    // a z-order (Morton) curve through their bounding box, ties by input
-    // index, and order the kept triangles by their lowest corner: a
-    // vertex's neighbours and triangles are then near it in memory. The
-    // simplifier reads one-rings in cost order, and its costing and walk
-    // wait on memory (first-use numbering of a scanned mesh puts a third of
-    // the bunny's edges 512+ vertices apart); this order made it 10 %
-    // faster.
-    // each triangle's corners as canonical vertices ([NONE; 3] when two
-    // are on one position: degenerate), then as welded ones
-    const NONE: u32 = u32::MAX;
-    let mut tris: Vec<[u32; 3]> = indices
+    let mut tris = canonical_triangles(indices, &canonical);
+    let (mut vertex_map, welded_positions) = renumber(positions, &tris, &mut stats);
+    let keys = sorted_keys(&mut tris, &vertex_map);
+    let kept = first_of_each_vertex_set(&keys, welded_positions.len());
+    // (the keys freed first: peak memory)
+    drop(keys);
+    let count = kept.iter().map(|k| k.0.len()).sum();
+    let mut triangles = Vec::with_capacity(count);
+    let mut triangle_map = Vec::with_capacity(count);
+    for (map, d) in kept {
+        triangles.extend(map.iter().map(|&ti| tris[ti as usize]));
+        triangle_map.extend_from_slice(&map);
+        stats.duplicate_triangles += d;
+    }
+    drop(tris);
+    for i in 0..positions.len() {
+        let c = canonical[i] as usize;
+        vertex_map[i] = vertex_map[c];
+        if c != i && vertex_map[c] != NONE {
+            stats.welded_vertices += 1;
+        }
+    }
+    stats.unused_vertices = positions.len() - stats.welded_vertices - welded_positions.len();
+    if triangles.is_empty() {
+        return Err(MeshError::Empty(
+            " left after dropping degenerate triangles",
+        ));
+    }
+    Ok(Prepared {
+        mesh: Mesh {
+            positions: welded_positions,
+            triangles,
+        },
+        vertex_map,
+        triangle_map,
+        stats,
+    })
+}
+
+/// A triangle or vertex of none (degenerate, unused).
+const NONE: u32 = u32::MAX;
+
+/// Each triangle's corners as canonical vertices, `[NONE; 3]` when two are
+/// on one position (degenerate).
+fn canonical_triangles(indices: &[u32], canonical: &[u32]) -> Vec<[u32; 3]> {
+    indices
         .par_chunks_exact(3)
         .map(|c| {
             let k = [c[0], c[1], c[2]].map(|i| canonical[i as usize]);
@@ -348,9 +382,26 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
                 [NONE; 3]
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Number the used vertices (those on a non-degenerate triangle) along a
+/// z-order (Morton) curve through their bounding box, ties by input index:
+/// canonical vertex → new number (`NONE` if unused), and the new numbering's
+/// positions. Counts the degenerate triangles.
+///
+/// With the kept triangles ordered by their lowest corner, a vertex's
+/// neighbours and triangles are then near it in memory. The simplifier
+/// reads one-rings in cost order, and its costing and walk wait on memory
+/// (first-use numbering of a scanned mesh puts a third of the bunny's edges
+/// 512+ vertices apart); this order made it 10 % faster.
+fn renumber(
+    positions: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    stats: &mut PrepareStats,
+) -> (Vec<u32>, Vec<[f32; 3]>) {
     let mut vertex_map = vec![NONE; positions.len()];
-    for t in &tris {
+    for t in tris {
         if t[0] == NONE {
             stats.degenerate_triangles += 1;
         } else {
@@ -367,11 +418,13 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     for (i, &c) in order.iter().enumerate() {
         vertex_map[c as usize] = i as u32;
     }
-    drop((order, used));
-    // each kept triangle in the new numbering, and its corners sorted (the
-    // key that finds duplicates), once
-    let keys: Vec<[u32; 3]> = tris
-        .par_iter_mut()
+    (vertex_map, welded_positions)
+}
+
+/// Each kept triangle in the new numbering (rewritten in place), and its
+/// corners sorted (the key that finds duplicates), once.
+fn sorted_keys(tris: &mut [[u32; 3]], vertex_map: &[u32]) -> Vec<[u32; 3]> {
+    tris.par_iter_mut()
         .map(|t| {
             if t[0] == NONE {
                 return [NONE; 3];
@@ -382,16 +435,18 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
             let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
             [lo, a ^ b ^ c ^ lo ^ hi, hi]
         })
-        .collect();
-    let nv = welded_positions.len();
-    // Group the triangles by their lowest corner (a counting sort; a group
-    // is one vertex's fan, so the memory traffic stays local, unlike a hash
-    // table of all triangles), sort each group by the other two corners
-    // (stably: then input order), and keep the first triangle on each
-    // vertex set (duplicates dropped): the kept triangles come out in the
-    // new order.
+        .collect()
+}
+
+/// Group the triangles by their lowest corner (a counting sort; a group is
+/// one vertex's fan, so the memory traffic stays local, unlike a hash table
+/// of all triangles), sort each group by the other two corners (stably:
+/// then input order), and keep the first triangle on each vertex set
+/// (duplicates dropped): per run of vertices, the kept triangles in the new
+/// order and the duplicates dropped.
+fn first_of_each_vertex_set(keys: &[[u32; 3]], nv: usize) -> Vec<(Vec<u32>, usize)> {
     let mut start = vec![0u32; nv + 1];
-    for k in &keys {
+    for k in keys {
         if k[0] != NONE {
             start[k[0] as usize + 1] += 1;
         }
@@ -424,8 +479,7 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
         let k = keys[ti as usize];
         u64::from(k[1]) << 32 | u64::from(k[2])
     };
-    let kept: Vec<(Vec<u32>, usize)> = runs
-        .into_par_iter()
+    runs.into_par_iter()
         .map(|(lo, hi, run)| {
             let (mut kept, mut duplicates) = (Vec::new(), 0);
             let base = start[lo];
@@ -447,40 +501,7 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
             }
             (kept, duplicates)
         })
-        .collect();
-    // (the keys and groups freed first: peak memory)
-    drop((group, start, keys));
-    let count = kept.iter().map(|k| k.0.len()).sum();
-    let mut triangles = Vec::with_capacity(count);
-    let mut triangle_map = Vec::with_capacity(count);
-    for (map, d) in kept {
-        triangles.extend(map.iter().map(|&ti| tris[ti as usize]));
-        triangle_map.extend_from_slice(&map);
-        stats.duplicate_triangles += d;
-    }
-    drop(tris);
-    for i in 0..positions.len() {
-        let c = canonical[i] as usize;
-        vertex_map[i] = vertex_map[c];
-        if c != i && vertex_map[c] != NONE {
-            stats.welded_vertices += 1;
-        }
-    }
-    stats.unused_vertices = positions.len() - stats.welded_vertices - welded_positions.len();
-    if triangles.is_empty() {
-        return Err(MeshError::Empty(
-            " left after dropping degenerate triangles",
-        ));
-    }
-    Ok(Prepared {
-        mesh: Mesh {
-            positions: welded_positions,
-            triangles,
-        },
-        vertex_map,
-        triangle_map,
-        stats,
-    })
+        .collect()
 }
 
 #[cfg(test)]

@@ -137,7 +137,6 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
         .collect();
     keys.sort_unstable();
     keys.dedup();
-    let n = keys.len();
     let wedge_count = src.positions.len();
     let valid = src.values.len() == dims * wedge_count
         && keys.iter().all(|&(_, w)| (w as usize) < wedge_count);
@@ -179,87 +178,200 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
         .zip(level.wedges)
         .map(|(t, w)| [0, 1, 2].map(|k| unknown(t[k], w[k])))
         .collect();
-    let chart = charts(wedge_count, src.triangles);
-    let level_chart: Vec<u32> = level.wedges.iter().map(|w| chart[w[0] as usize]).collect();
-
-    // Samples → (level triangle, barycentrics), in parallel batches, then
-    // summed in sample order into each level triangle's 3×3 block
-    // `Σ ω γ_i γ_j` and its right-hand sides `Σ ω γ_i a_d(p)`: memory
-    // bounded by the level, not by the sample count.
-    let p3 = |ps: &[[f32; 3]], v: u32| ps[v as usize].map(f64::from);
-    let nl = level.triangles.len();
-    let mut block = vec![0.0f64; 9 * nl];
-    let mut rhs0 = vec![0.0f64; 3 * dims * nl];
-    // the range of the input values that landed on each level triangle
-    let mut seen = vec![[f64::INFINITY, f64::NEG_INFINITY]; dims * nl];
-    let total = src.triangles.len() * RULE.len();
-    let mut start = 0;
-    while start < total {
-        let end = (start + BATCH * CHUNK).min(total);
-        let hits: Vec<Option<(u32, [f64; 3])>> = (start..end)
-            .collect::<Vec<usize>>()
-            .par_chunks(CHUNK)
-            .flat_map_iter(|chunk| {
-                chunk.iter().map(|&i| {
-                    let tri = src.triangles[i / RULE.len()];
-                    let [a, b, c] = tri.map(|v| p3(src.positions, v));
-                    let g = RULE[i % RULE.len()].0;
-                    let p = [0, 1, 2].map(|k| g[0] * a[k] + g[1] * b[k] + g[2] * c[k]);
-                    let (_, lt, q) = bvh.closest_point(p)?;
-                    if level_chart[lt as usize] != chart[tri[0] as usize] {
-                        return None;
-                    }
-                    let lp = level.triangles[lt as usize].map(|v| p3(level.positions, v));
-                    Some((lt, barycentric(lp, q)))
-                })
-            })
-            .collect();
-        for (i, hit) in (start..end).zip(hits) {
-            let Some((lt, g)) = hit else { continue };
-            let tri = src.triangles[i / RULE.len()];
-            let [a, b, c] = tri.map(|v| p3(src.positions, v));
-            let (beta, weight) = RULE[i % RULE.len()];
-            let omega = 0.5 * norm(cross(sub(b, a), sub(c, a))) * weight;
-            if omega == 0.0 || !omega.is_finite() {
-                continue;
-            }
-            let lt = lt as usize;
-            for i in 0..3 {
-                for j in 0..3 {
-                    block[9 * lt + 3 * i + j] += omega * g[i] * g[j];
-                }
-            }
-            for d in 0..dims {
-                let value: f64 = (0..3)
-                    .map(|k| beta[k] * f64::from(src.values[tri[k] as usize * dims + d]))
-                    .sum();
-                for i in 0..3 {
-                    rhs0[(3 * lt + i) * dims + d] += omega * g[i] * value;
-                }
-                let r = &mut seen[lt * dims + d];
-                *r = [r[0].min(value), r[1].max(value)];
-            }
-        }
-        start = end;
-    }
-
+    let sums = Sums::of(src, level, &bvh);
+    let problem = Problem {
+        src,
+        keys: &keys,
+        corner_keys: &corner_keys,
+        x0: &x0,
+        sums: &sums,
+    };
     let mut x = x0.clone();
     for channel in channels {
+        problem.fit_channel(channel, &mut x);
+    }
+    input(x)
+}
+
+/// Every input sample's contribution, summed per level triangle: the 3×3
+/// block `Σ ω γ_i γ_j`, the right-hand sides `Σ ω γ_i a_d(p)`, and the range
+/// of the input values that landed on it.
+struct Sums {
+    block: Vec<f64>,
+    rhs0: Vec<f64>,
+    seen: Vec<[f64; 2]>,
+}
+
+impl Sums {
+    /// Samples → (level triangle, barycentrics), in parallel batches, then
+    /// summed in sample order: memory bounded by the level, not by the
+    /// sample count. A sample counts only where the level triangle is in the
+    /// input triangle's chart.
+    fn of(src: Source<'_>, level: Level<'_>, bvh: &TriangleBvh) -> Sums {
+        let dims = src.dims;
+        let chart = charts(src.positions.len(), src.triangles);
+        let level_chart: Vec<u32> = level.wedges.iter().map(|w| chart[w[0] as usize]).collect();
+        let p3 = |ps: &[[f32; 3]], v: u32| ps[v as usize].map(f64::from);
+        let nl = level.triangles.len();
+        let mut block = vec![0.0f64; 9 * nl];
+        let mut rhs0 = vec![0.0f64; 3 * dims * nl];
+        // the range of the input values that landed on each level triangle
+        let mut seen = vec![[f64::INFINITY, f64::NEG_INFINITY]; dims * nl];
+        let total = src.triangles.len() * RULE.len();
+        let mut start = 0;
+        while start < total {
+            let end = (start + BATCH * CHUNK).min(total);
+            let hits: Vec<Option<(u32, [f64; 3])>> = (start..end)
+                .collect::<Vec<usize>>()
+                .par_chunks(CHUNK)
+                .flat_map_iter(|chunk| {
+                    chunk.iter().map(|&i| {
+                        let tri = src.triangles[i / RULE.len()];
+                        let [a, b, c] = tri.map(|v| p3(src.positions, v));
+                        let g = RULE[i % RULE.len()].0;
+                        let p = [0, 1, 2].map(|k| g[0] * a[k] + g[1] * b[k] + g[2] * c[k]);
+                        let (_, lt, q) = bvh.closest_point(p)?;
+                        if level_chart[lt as usize] != chart[tri[0] as usize] {
+                            return None;
+                        }
+                        let lp = level.triangles[lt as usize].map(|v| p3(level.positions, v));
+                        Some((lt, barycentric(lp, q)))
+                    })
+                })
+                .collect();
+            for (i, hit) in (start..end).zip(hits) {
+                let Some((lt, g)) = hit else { continue };
+                let tri = src.triangles[i / RULE.len()];
+                let [a, b, c] = tri.map(|v| p3(src.positions, v));
+                let (beta, weight) = RULE[i % RULE.len()];
+                let omega = 0.5 * norm(cross(sub(b, a), sub(c, a))) * weight;
+                if omega == 0.0 || !omega.is_finite() {
+                    continue;
+                }
+                let lt = lt as usize;
+                for i in 0..3 {
+                    for j in 0..3 {
+                        block[9 * lt + 3 * i + j] += omega * g[i] * g[j];
+                    }
+                }
+                for d in 0..dims {
+                    let value: f64 = (0..3)
+                        .map(|k| beta[k] * f64::from(src.values[tri[k] as usize * dims + d]))
+                        .sum();
+                    for i in 0..3 {
+                        rhs0[(3 * lt + i) * dims + d] += omega * g[i] * value;
+                    }
+                    let r = &mut seen[lt * dims + d];
+                    *r = [r[0].min(value), r[1].max(value)];
+                }
+            }
+            start = end;
+        }
+        Sums { block, rhs0, seen }
+    }
+}
+
+/// The sparse normal matrix of one channel's unknowns (CSR).
+struct Normal {
+    row_start: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+}
+
+/// The least-squares problem of a level: its keys, each level triangle's
+/// corner keys, the input values `x0` and the summed samples.
+struct Problem<'a> {
+    src: Source<'a>,
+    keys: &'a [(u32, u32)],
+    corner_keys: &'a [[u32; 3]],
+    x0: &'a [f64],
+    sums: &'a Sums,
+}
+
+impl Problem<'_> {
+    /// Fit `channel`'s components of `x`.
+    fn fit_channel(&self, channel: &Channel, x: &mut [f64]) {
+        let dims = self.src.dims;
         let range = &channel.components;
         let range = range.start.min(dims)..range.end.min(dims);
         if range.is_empty() {
-            continue;
+            return;
         }
-        // One unknown per level vertex where its wedges agree on the
-        // channel, none (input values kept) where they differ.
-        let mut unk = vec![u32::MAX; n];
+        let (unk, rep) = self.unknowns(&range);
+        let m = rep.len();
+        let width = range.len();
+        let (normal, rhs) = self.normal_equations(&unk, m, &range);
+        let Normal {
+            row_start,
+            cols,
+            vals,
+        } = &normal;
+        let mut diag = vec![0.0; m];
+        for i in 0..m {
+            for e in row_start[i]..row_start[i + 1] {
+                if cols[e] as usize == i {
+                    diag[i] = vals[e];
+                }
+            }
+        }
+        // Regularisation: λ·D_i, and a unit pull where nothing constrains x_i.
+        let scale = diag
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let reg: Vec<f64> = diag
+            .iter()
+            .map(|&d| if d > 0.0 { LAMBDA * d } else { scale })
+            .collect();
+        let apply = |y: &[f64], out: &mut [f64]| {
+            for i in 0..m {
+                let mut s = reg[i] * y[i];
+                for e in row_start[i]..row_start[i + 1] {
+                    s += vals[e] * y[cols[e] as usize];
+                }
+                out[i] = s;
+            }
+        };
+        let precondition = diag_plus(&diag, &reg);
+        let bounds = self.bounds(&unk, m, &range);
+        let x0 = self.x0;
+        for c in 0..width {
+            let d = range.start + c;
+            let start: Vec<f64> = rep.iter().map(|&i| x0[i * dims + d]).collect();
+            let b: Vec<f64> = (0..m)
+                .map(|i| rhs[i * width + c] + reg[i] * start[i])
+                .collect();
+            let mut y = start;
+            conjugate_gradients(&apply, &b, &precondition, &mut y);
+            for (i, &u) in unk.iter().enumerate() {
+                if u != u32::MAX && y[u as usize].is_finite() {
+                    x[i * dims + d] = if channel.bounded {
+                        let [lo, hi] = bounds[u as usize * width + c];
+                        let own = x0[i * dims + d];
+                        y[u as usize].clamp(lo.min(own), hi.max(own))
+                    } else {
+                        y[u as usize]
+                    };
+                }
+            }
+        }
+    }
+
+    /// One unknown per level vertex where its wedges agree on the channel's
+    /// components, none (`u32::MAX`: input values kept) where they differ:
+    /// key → unknown, and each unknown's representative key (its start
+    /// value).
+    fn unknowns(&self, range: &Range<usize>) -> (Vec<u32>, Vec<usize>) {
+        let (dims, values) = (self.src.dims, self.src.values);
+        let mut unk = vec![u32::MAX; self.keys.len()];
         let mut count = 0u32;
         let mut first = 0;
-        for run in keys.chunk_by(|a, b| a.0 == b.0) {
+        for run in self.keys.chunk_by(|a, b| a.0 == b.0) {
             let same = run.iter().all(|&(_, w)| {
                 range.clone().all(|c| {
-                    src.values[w as usize * dims + c].to_bits()
-                        == src.values[run[0].1 as usize * dims + c].to_bits()
+                    values[w as usize * dims + c].to_bits()
+                        == values[run[0].1 as usize * dims + c].to_bits()
                 })
             });
             if same {
@@ -268,20 +380,24 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
             }
             first += run.len();
         }
-        let m = count as usize;
-        let width = range.len();
-        // representative key of each unknown (its start value)
-        let mut rep = vec![0usize; m];
+        let mut rep = vec![0usize; count as usize];
         for (i, &u) in unk.iter().enumerate().rev() {
             if u != u32::MAX {
                 rep[u as usize] = i;
             }
         }
-        // Normal matrix (CSR) and right-hand sides from the blocks, in
-        // level-triangle order; fixed corners go to the right-hand side.
-        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * nl);
+        (unk, rep)
+    }
+
+    /// Normal matrix (CSR) and right-hand sides (`range.len()` per
+    /// unknown) from the blocks, in level-triangle order; fixed corners go
+    /// to the right-hand side.
+    fn normal_equations(&self, unk: &[u32], m: usize, range: &Range<usize>) -> (Normal, Vec<f64>) {
+        let (dims, width) = (self.src.dims, range.len());
+        let (block, rhs0, x0) = (&self.sums.block, &self.sums.rhs0, self.x0);
+        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * self.corner_keys.len());
         let mut rhs = vec![0.0; m * width];
-        for (lt, ks) in corner_keys.iter().enumerate() {
+        for (lt, ks) in self.corner_keys.iter().enumerate() {
             let bl = &block[9 * lt..9 * lt + 9];
             for i in 0..3 {
                 let ui = unk[ks[i] as usize];
@@ -317,37 +433,20 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
         for i in 0..m {
             row_start[i + 1] += row_start[i];
         }
-        let mut diag = vec![0.0; m];
-        for i in 0..m {
-            for e in row_start[i]..row_start[i + 1] {
-                if cols[e] as usize == i {
-                    diag[i] = vals[e];
-                }
-            }
-        }
-        // Regularisation: λ·D_i, and a unit pull where nothing constrains x_i.
-        let scale = diag
-            .iter()
-            .copied()
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
-        let reg: Vec<f64> = diag
-            .iter()
-            .map(|&d| if d > 0.0 { LAMBDA * d } else { scale })
-            .collect();
-        let apply = |y: &[f64], out: &mut [f64]| {
-            for i in 0..m {
-                let mut s = reg[i] * y[i];
-                for e in row_start[i]..row_start[i + 1] {
-                    s += vals[e] * y[cols[e] as usize];
-                }
-                out[i] = s;
-            }
+        let normal = Normal {
+            row_start,
+            cols,
+            vals,
         };
-        let precondition = diag_plus(&diag, &reg);
-        // each unknown's bounds: what the input shows on its triangles
+        (normal, rhs)
+    }
+
+    /// Each unknown's bounds per component: the range of the input values
+    /// that landed on its level triangles.
+    fn bounds(&self, unk: &[u32], m: usize, range: &Range<usize>) -> Vec<[f64; 2]> {
+        let (dims, width) = (self.src.dims, range.len());
         let mut bounds = vec![[f64::INFINITY, f64::NEG_INFINITY]; m * width];
-        for (lt, ks) in corner_keys.iter().enumerate() {
+        for (lt, ks) in self.corner_keys.iter().enumerate() {
             for &k in ks {
                 let u = unk[k as usize];
                 if u == u32::MAX {
@@ -355,35 +454,15 @@ pub fn fit(src: Source<'_>, level: Level<'_>, channels: &[Channel]) -> Fitted {
                 }
                 for c in 0..width {
                     let (r, b) = (
-                        seen[lt * dims + range.start + c],
+                        self.sums.seen[lt * dims + range.start + c],
                         &mut bounds[u as usize * width + c],
                     );
                     *b = [b[0].min(r[0]), b[1].max(r[1])];
                 }
             }
         }
-        for c in 0..width {
-            let d = range.start + c;
-            let start: Vec<f64> = rep.iter().map(|&i| x0[i * dims + d]).collect();
-            let b: Vec<f64> = (0..m)
-                .map(|i| rhs[i * width + c] + reg[i] * start[i])
-                .collect();
-            let mut y = start;
-            conjugate_gradients(&apply, &b, &precondition, &mut y);
-            for (i, &u) in unk.iter().enumerate() {
-                if u != u32::MAX && y[u as usize].is_finite() {
-                    x[i * dims + d] = if channel.bounded {
-                        let [lo, hi] = bounds[u as usize * width + c];
-                        let own = x0[i * dims + d];
-                        y[u as usize].clamp(lo.min(own), hi.max(own))
-                    } else {
-                        y[u as usize]
-                    };
-                }
-            }
-        }
+        bounds
     }
-    input(x)
 }
 
 fn diag_plus(diag: &[f64], reg: &[f64]) -> Vec<f64> {

@@ -229,38 +229,15 @@ impl ProgressiveMesh {
         log: &Log,
         wedges: Option<&[[u32; 3]]>,
     ) -> ProgressiveMesh {
-        let (records, tracked) = (&log.records, !log.wedges.is_empty());
-        // every vertex's position after the contraction being renumbered:
-        // walking the log backwards, `v1` goes back to `p1`
-        let mut current = positions.to_vec();
-        const NONE: u32 = u32::MAX;
-        let mut vnew = vec![NONE; positions.len()];
-        let mut tnew = vec![NONE; triangles.len()];
-        let mut vertex_origin = Vec::with_capacity(positions.len());
-        let mut triangle_origin = Vec::with_capacity(triangles.len());
-        for (v, &alive) in vertex_alive.iter().enumerate() {
-            if alive {
-                vnew[v] = vertex_origin.len() as u32;
-                vertex_origin.push(v as u32);
-            }
-        }
-        for (t, &alive) in triangle_alive.iter().enumerate() {
-            if alive {
-                tnew[t] = triangle_origin.len() as u32;
-                triangle_origin.push(t as u32);
-            }
-        }
-        let base_vertices = vertex_origin.len();
-        let base_triangles = triangle_origin.len();
-        for c in records.iter().rev() {
-            vnew[c.v0 as usize] = vertex_origin.len() as u32;
-            vertex_origin.push(c.v0);
-            for &t in &c.removed {
-                tnew[t as usize] = triangle_origin.len() as u32;
-                triangle_origin.push(t);
-            }
-        }
-        debug_assert!(vnew.iter().all(|&v| v != NONE));
+        let records = &log.records;
+        let Numbering {
+            vnew,
+            tnew,
+            vertex_origin,
+            triangle_origin,
+            base_vertices,
+            base_triangles,
+        } = Numbering::of(vertex_alive, triangle_alive, records);
         let map = |t: &[u32; 3]| t.map(|v| vnew[v as usize]);
         // The final state's corners, and the corners as they were when each
         // removed triangle died, are both in `triangles` (dead triangles are
@@ -277,93 +254,25 @@ impl ProgressiveMesh {
         };
         // the merged positions need the log in order; the rest of each
         // split only reads shared maps, so splits are built in parallel
-        let p_merged: Vec<[f32; 3]> = records
-            .iter()
-            .rev()
-            .map(|c| {
-                let p = current[c.v1 as usize];
-                current[c.v1 as usize] = c.p1;
-                p
-            })
-            .collect();
-        drop(current);
-        let build = |corners: &mut Vec<(Corner, [u32; 2])>,
-                     (c, &p_merged): (&Contraction, &[f32; 3])|
-         -> (VertexSplit, Option<SplitWedges>) {
-            corners.clear();
-            let range = c.moved.start as usize..c.moved.end as usize;
-            corners.extend(log.moved(c).zip(range).map(|(k, i)| {
-                let corner = Corner {
-                    triangle: tnew[k.triangle as usize],
-                    slot: k.slot,
-                };
-                // a split undoes the contraction: after ↔ before
-                let w = if tracked {
-                    let w = log.wedges[i];
-                    [w[1], w[0]]
-                } else {
-                    [0; 2]
-                };
-                (corner, w)
-            }));
-            // by triangle (each is on one corner of a split: the same order
-            // as sorting the whole tuples, for less)
-            corners.sort_unstable_by_key(|c| c.0.triangle);
-            let split_wedges = wedges.map(|w| SplitWedges {
-                faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
-                corners: corners.iter().map(|c| c.1).collect(),
-            });
-            let split = VertexSplit {
-                v1: vnew[c.v1 as usize],
-                v0: vnew[c.v0 as usize],
-                p1: c.p1,
-                p_merged,
-                p0: positions[c.v0 as usize],
-                faces: c
-                    .removed
-                    .iter()
-                    .map(|&t| map(&triangles[t as usize]))
-                    .collect(),
-                corners: corners.iter().map(|c| c.0).collect(),
-                error: c.error,
-            };
-            (split, split_wedges)
+        let p_merged = merged_positions(positions, records);
+        let b = SplitBuilder {
+            positions,
+            triangles,
+            log,
+            wedges,
+            vnew: &vnew,
+            tnew: &tnew,
         };
-        // Split k undoes the k-th newest contraction. The log is in
-        // contraction order, so each split's triangles and vertices are
-        // cold: a split prefetches what the one eight on reads directly,
-        // and the maps of the triangle corners of the one four on.
         let n = records.len();
-        let ahead = |k: usize| {
-            if k + 8 < n {
-                let c = &records[n - 1 - (k + 8)];
-                for &t in &c.removed {
-                    prefetch(&triangles[t as usize]);
-                }
-                for x in log.moved(c) {
-                    prefetch(&tnew[x.triangle as usize]);
-                }
-                prefetch(&positions[c.v0 as usize]);
-                prefetch(&vnew[c.v0 as usize]);
-                prefetch(&vnew[c.v1 as usize]);
-            }
-            if k + 4 < n {
-                for &t in &records[n - 1 - (k + 4)].removed {
-                    for &x in &triangles[t as usize] {
-                        prefetch(&vnew[x as usize]);
-                    }
-                }
-            }
-        };
         let item = |k: usize| {
-            ahead(k);
+            b.prefetch_ahead(k);
             (&records[n - 1 - k], &p_merged[k])
         };
         let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if wedges.is_some() {
             (0..n)
                 .into_par_iter()
                 .map_init(Vec::new, |buf, k| {
-                    let (s, w) = build(buf, item(k));
+                    let (s, w) = b.build(buf, item(k));
                     (s, w.unwrap_or_default())
                 })
                 .unzip()
@@ -371,7 +280,7 @@ impl ProgressiveMesh {
             (
                 (0..n)
                     .into_par_iter()
-                    .map_init(Vec::new, |buf, k| build(buf, item(k)).0)
+                    .map_init(Vec::new, |buf, k| b.build(buf, item(k)).0)
                     .collect(),
                 Vec::new(),
             )
@@ -563,6 +472,170 @@ impl<'a> Cursor<'a> {
             self.refine(k - self.applied);
         } else {
             self.coarsen(self.applied - k);
+        }
+    }
+}
+
+/// The refinement numbering of a log: the base mesh's live vertices and
+/// triangles in id order, then each split's vertex and restored triangles,
+/// newest contraction first.
+struct Numbering {
+    /// Simplifier vertex → refinement number.
+    vnew: Vec<u32>,
+    /// Simplifier triangle → refinement number.
+    tnew: Vec<u32>,
+    /// Refinement number → simplifier vertex.
+    vertex_origin: Vec<u32>,
+    /// Refinement number → simplifier triangle.
+    triangle_origin: Vec<u32>,
+    base_vertices: usize,
+    base_triangles: usize,
+}
+
+impl Numbering {
+    fn of(vertex_alive: &[bool], triangle_alive: &[bool], records: &[Contraction]) -> Numbering {
+        const NONE: u32 = u32::MAX;
+        let mut vnew = vec![NONE; vertex_alive.len()];
+        let mut tnew = vec![NONE; triangle_alive.len()];
+        let mut vertex_origin = Vec::with_capacity(vertex_alive.len());
+        let mut triangle_origin = Vec::with_capacity(triangle_alive.len());
+        for (v, &alive) in vertex_alive.iter().enumerate() {
+            if alive {
+                vnew[v] = vertex_origin.len() as u32;
+                vertex_origin.push(v as u32);
+            }
+        }
+        for (t, &alive) in triangle_alive.iter().enumerate() {
+            if alive {
+                tnew[t] = triangle_origin.len() as u32;
+                triangle_origin.push(t as u32);
+            }
+        }
+        let base_vertices = vertex_origin.len();
+        let base_triangles = triangle_origin.len();
+        for c in records.iter().rev() {
+            vnew[c.v0 as usize] = vertex_origin.len() as u32;
+            vertex_origin.push(c.v0);
+            for &t in &c.removed {
+                tnew[t as usize] = triangle_origin.len() as u32;
+                triangle_origin.push(t);
+            }
+        }
+        debug_assert!(vnew.iter().all(|&v| v != NONE));
+        Numbering {
+            vnew,
+            tnew,
+            vertex_origin,
+            triangle_origin,
+            base_vertices,
+            base_triangles,
+        }
+    }
+}
+
+/// The merged position of each split (newest contraction first): every
+/// vertex's position after the contraction being renumbered, walking the
+/// log backwards, where `v1` goes back to `p1`.
+fn merged_positions(positions: &[[f32; 3]], records: &[Contraction]) -> Vec<[f32; 3]> {
+    let mut current = positions.to_vec();
+    records
+        .iter()
+        .rev()
+        .map(|c| {
+            let p = current[c.v1 as usize];
+            current[c.v1 as usize] = c.p1;
+            p
+        })
+        .collect()
+}
+
+/// What building one vertex split reads (shared by the threads).
+struct SplitBuilder<'a> {
+    positions: &'a [[f32; 3]],
+    triangles: &'a [[u32; 3]],
+    log: &'a Log,
+    wedges: Option<&'a [[u32; 3]]>,
+    vnew: &'a [u32],
+    tnew: &'a [u32],
+}
+
+impl SplitBuilder<'_> {
+    /// The split undoing contraction `c`, whose merged position was
+    /// `p_merged` (and its wedges, when tracked); `corners` is scratch.
+    #[inline]
+    fn build(
+        &self,
+        corners: &mut Vec<(Corner, [u32; 2])>,
+        (c, &p_merged): (&Contraction, &[f32; 3]),
+    ) -> (VertexSplit, Option<SplitWedges>) {
+        let (log, tracked) = (self.log, !self.log.wedges.is_empty());
+        let map = |t: &[u32; 3]| t.map(|v| self.vnew[v as usize]);
+        corners.clear();
+        let range = c.moved.start as usize..c.moved.end as usize;
+        corners.extend(log.moved(c).zip(range).map(|(k, i)| {
+            let corner = Corner {
+                triangle: self.tnew[k.triangle as usize],
+                slot: k.slot,
+            };
+            // a split undoes the contraction: after ↔ before
+            let w = if tracked {
+                let w = log.wedges[i];
+                [w[1], w[0]]
+            } else {
+                [0; 2]
+            };
+            (corner, w)
+        }));
+        // by triangle (each is on one corner of a split: the same order
+        // as sorting the whole tuples, for less)
+        corners.sort_unstable_by_key(|c| c.0.triangle);
+        let split_wedges = self.wedges.map(|w| SplitWedges {
+            faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
+            corners: corners.iter().map(|c| c.1).collect(),
+        });
+        let split = VertexSplit {
+            v1: self.vnew[c.v1 as usize],
+            v0: self.vnew[c.v0 as usize],
+            p1: c.p1,
+            p_merged,
+            p0: self.positions[c.v0 as usize],
+            faces: c
+                .removed
+                .iter()
+                .map(|&t| map(&self.triangles[t as usize]))
+                .collect(),
+            corners: corners.iter().map(|c| c.0).collect(),
+            error: c.error,
+        };
+        (split, split_wedges)
+    }
+
+    /// Split k undoes the k-th newest contraction. The log is in
+    /// contraction order, so each split's triangles and vertices are cold:
+    /// a split prefetches what the one eight on reads directly, and the
+    /// maps of the triangle corners of the one four on.
+    #[inline]
+    fn prefetch_ahead(&self, k: usize) {
+        let (records, vnew) = (&self.log.records, self.vnew);
+        let n = records.len();
+        if k + 8 < n {
+            let c = &records[n - 1 - (k + 8)];
+            for &t in &c.removed {
+                prefetch(&self.triangles[t as usize]);
+            }
+            for x in self.log.moved(c) {
+                prefetch(&self.tnew[x.triangle as usize]);
+            }
+            prefetch(&self.positions[c.v0 as usize]);
+            prefetch(&vnew[c.v0 as usize]);
+            prefetch(&vnew[c.v1 as usize]);
+        }
+        if k + 4 < n {
+            for &t in &records[n - 1 - (k + 4)].removed {
+                for &x in &self.triangles[t as usize] {
+                    prefetch(&vnew[x as usize]);
+                }
+            }
         }
     }
 }
