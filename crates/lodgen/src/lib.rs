@@ -10,5 +10,7 @@ pub mod inspect;
 pub mod io;
 pub mod lod;
 pub mod progressive;
+#[cfg(feature = "python")]
+pub mod python;
 pub mod scene;
 pub mod view;

@@ -1,0 +1,400 @@
+"""lodgen: levels of detail and progressive meshes with measured error.
+
+Garland-Heckbert quadric pair contraction in which every contraction is
+recorded as a Hoppe vertex split, from Python::
+
+    import lodgen, trimesh
+    mesh = trimesh.load("bunny.obj")
+    result = lodgen.simplify(mesh, levels=[0.5, 0.1, 0.02])
+    for level in result.levels:
+        print(len(level.faces), level.errors.hausdorff_percent)
+
+Keyword options are the ``lodgen`` command's flags with ``_`` for ``-``
+(``tau="0.5%"``, ``boundary="locked"``, ``method="qem-curvature"``,
+``uniform_weights=True``; see ``lodgen --help`` for every one with its
+default and unit), parsed by the command's own parser, so defaults and
+error messages are the command's. Every call releases the GIL while it
+works. Errors raise :class:`LodgenError` (a ``ValueError``) with the
+command's message.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _lodgen
+from ._lodgen import LodgenError
+
+__all__ = [
+    "Errors",
+    "Level",
+    "LodgenError",
+    "ProgressiveMesh",
+    "SimplifyResult",
+    "batch",
+    "build",
+    "expand_inputs",
+    "measure",
+    "simplify",
+]
+
+__version__: str = _lodgen.__version__
+
+#: The dtype of :attr:`ProgressiveMesh.splits`: one record per vertex split,
+#: coarse to fine. ``faces`` holds the ``n_faces`` (0-2) restored triangles,
+#: unused rows are 2**32 - 1; ``n_corners`` is how many corners go from
+#: ``v1`` back to ``v0``; ``error`` the contraction's quadric error.
+SPLIT_DTYPE = np.dtype(
+    [
+        ("v1", "<u4"),
+        ("v0", "<u4"),
+        ("p1", "<f4", (3,)),
+        ("p_merged", "<f4", (3,)),
+        ("p0", "<f4", (3,)),
+        ("n_faces", "u1"),
+        ("faces", "<u4", (2, 3)),
+        ("n_corners", "<u4"),
+        ("error", "<f4"),
+    ]
+)
+
+MeshLike = Any  # a trimesh.Trimesh, or anything with .vertices and .faces
+
+
+def _flag_value(key: str, value: Any) -> str:
+    if key == "levels" and not isinstance(value, str):
+        items = []
+        for v in value:
+            if isinstance(v, (bool, np.bool_)):
+                raise LodgenError(f"--levels: {v!r} is not a ratio or a triangle count")
+            if isinstance(v, (int, np.integer)):
+                items.append(str(int(v)))
+            elif isinstance(v, str):
+                items.append(v)
+            else:
+                items.append(repr(float(v)))
+        return ",".join(items)
+    if key == "max_error" and not isinstance(value, str):
+        return ",".join(v if isinstance(v, str) else f"{float(v)!r}%" for v in value)
+    if key == "attribute_weights" and isinstance(value, dict):
+        return ",".join(f"{k}={float(v)!r}" for k, v in value.items())
+    return str(value)
+
+
+def _argv(options: dict) -> List[str]:
+    """The command line's flags for keyword options."""
+    argv: List[str] = []
+    for key, value in options.items():
+        if key in ("input", "inputs", "output", "out_dir"):
+            raise LodgenError(f"{key}= is not an option here; pass paths as arguments")
+        if value is None or value is False:
+            continue
+        flag = "--" + key.replace("_", "-")
+        if value is True:
+            argv.append(flag)
+        else:
+            argv += [flag, _flag_value(key, value)]
+    return argv
+
+
+def _mesh_arrays(vertices: Any, faces: Any = None) -> Tuple[np.ndarray, np.ndarray, np.dtype]:
+    if faces is None:
+        if isinstance(vertices, tuple) and len(vertices) == 2:
+            vertices, faces = vertices
+        elif hasattr(vertices, "vertices") and hasattr(vertices, "faces"):
+            vertices, faces = vertices.vertices, vertices.faces
+        else:
+            raise LodgenError(
+                "pass vertices and faces, a (vertices, faces) tuple or a trimesh.Trimesh"
+            )
+    v = np.asarray(vertices)
+    f = np.asarray(faces)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise LodgenError(f"vertices must have shape (n, 3), not {v.shape}")
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise LodgenError(f"faces must have shape (m, 3), not {f.shape}")
+    if not np.issubdtype(v.dtype, np.floating) and not np.issubdtype(v.dtype, np.integer):
+        raise LodgenError(f"vertices must be numbers, not {v.dtype}")
+    if f.size and not np.issubdtype(f.dtype, np.integer):
+        raise LodgenError(f"faces must be integer vertex indices, not {f.dtype}")
+    return (
+        np.ascontiguousarray(v, dtype=np.float32),
+        np.ascontiguousarray(f, dtype=np.int64),
+        v.dtype,
+    )
+
+
+@dataclass(frozen=True)
+class Errors:
+    """Measured distance between two surfaces (area-weighted samples plus
+    every vertex, exact point-triangle distance, both directions), in mesh
+    units; the ``*_percent`` properties are % of the reference's
+    bounding-box diagonal, as the command prints them."""
+
+    diagonal: float
+    hausdorff: float
+    mean: float
+    rms: float
+    a_to_b_max: float
+    a_to_b_mean: float
+    a_to_b_rms: float
+    a_to_b_samples: int
+    b_to_a_max: float
+    b_to_a_mean: float
+    b_to_a_rms: float
+    b_to_a_samples: int
+
+    @classmethod
+    def _from(cls, t: Sequence[float]) -> "Errors":
+        return cls(
+            t[0], t[1], t[2], t[3], t[4], t[5], t[6], int(t[7]), t[8], t[9], t[10], int(t[11])
+        )
+
+    def percent(self, distance: float) -> float:
+        return 100.0 * distance / self.diagonal if self.diagonal > 0 else 0.0
+
+    @property
+    def hausdorff_percent(self) -> float:
+        return self.percent(self.hausdorff)
+
+    @property
+    def mean_percent(self) -> float:
+        return self.percent(self.mean)
+
+    @property
+    def rms_percent(self) -> float:
+        return self.percent(self.rms)
+
+
+@dataclass(frozen=True)
+class Level:
+    """One level of detail: its mesh, the splits from the base mesh that
+    reach it, and its measured error against the input."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    splits: int
+    errors: Errors
+
+    def to_trimesh(self) -> Any:
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
+class ProgressiveMesh:
+    """The whole sequence M_n ... M_g of a simplification: a base mesh and
+    the vertex splits that refine it back to the (welded) input exactly,
+    with a cursor that moves split by split.
+
+    ``ProgressiveMesh(vertices, faces, target_triangles=None, **options)``
+    simplifies as far as it can (or to ``target_triangles``) and keeps the
+    log; :func:`simplify` returns the one its levels were cut from.
+    Vertex and triangle numbers are the progressive ones: vertex ``i`` of
+    a mesh is vertex ``vertex_origin[i]`` of the welded input, and
+    ``vertex_map`` maps input vertices to welded ones.
+    """
+
+    def __init__(
+        self,
+        vertices: Any = None,
+        faces: Any = None,
+        *,
+        target_triangles: Optional[int] = None,
+        _native: Any = None,
+        **options: Any,
+    ) -> None:
+        if _native is None:
+            v, f, _ = _mesh_arrays(vertices, faces)
+            _native = _lodgen.progressive(v, f, _argv(options), target_triangles)
+        self._pm = _native
+
+    def __len__(self) -> int:
+        """Number of vertex splits."""
+        return len(self._pm)
+
+    def __repr__(self) -> str:
+        counts = self.triangle_counts
+        return (
+            f"<lodgen.ProgressiveMesh {len(self)} splits, {counts[0]} -> "
+            f"{counts[-1]} triangles, cursor at {self.applied}>"
+        )
+
+    @property
+    def applied(self) -> int:
+        """Splits applied at the cursor (0 = the base mesh)."""
+        return self._pm.applied
+
+    @property
+    def triangle_counts(self) -> np.ndarray:
+        """Triangle count after k splits, for k = 0 ... len(self)."""
+        return self._pm.triangle_counts()
+
+    def mesh_at(self, triangles: int) -> Tuple[np.ndarray, np.ndarray]:
+        """The finest mesh of the sequence with at most ``triangles``
+        triangles (the base mesh if it has more): (vertices, faces)."""
+        return self._pm.mesh_at_splits(self._pm.splits_for_triangles(int(triangles)))
+
+    def mesh_at_splits(self, k: int) -> Tuple[np.ndarray, np.ndarray]:
+        """The mesh after ``k`` splits (clamped to ``len(self)``)."""
+        return self._pm.mesh_at_splits(int(k))
+
+    @property
+    def mesh(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The mesh at the cursor: (vertices, faces)."""
+        return self._pm.mesh()
+
+    def refine(self, n: int = 1) -> int:
+        """Apply up to ``n`` more splits at the cursor; returns how many."""
+        return self._pm.refine(int(n))
+
+    def coarsen(self, n: int = 1) -> int:
+        """Undo up to ``n`` splits at the cursor; returns how many."""
+        return self._pm.coarsen(int(n))
+
+    def seek(self, k: int) -> None:
+        """Move the cursor to exactly ``k`` splits (clamped)."""
+        self._pm.seek(int(k))
+
+    @property
+    def splits(self) -> np.ndarray:
+        """Every vertex split, coarse to fine, as a structured array of
+        :data:`SPLIT_DTYPE`."""
+        v1, v0, p1, pm, p0, faces, nf, nc, err = self._pm.split_columns()
+        out = np.zeros(len(v1), dtype=SPLIT_DTYPE)
+        out["v1"], out["v0"] = v1, v0
+        out["p1"] = p1.reshape(-1, 3)
+        out["p_merged"] = pm.reshape(-1, 3)
+        out["p0"] = p0.reshape(-1, 3)
+        out["faces"] = faces.reshape(-1, 2, 3)
+        out["n_faces"], out["n_corners"], out["error"] = nf, nc, err
+        return out
+
+    def full_in_input_order(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The fully refined mesh in the welded input's own numbering:
+        equal, index for index, to the mesh that was simplified."""
+        return self._pm.full_in_input_order()
+
+    @property
+    def vertex_origin(self) -> np.ndarray:
+        """Progressive vertex -> welded input vertex."""
+        return self._pm.vertex_origin
+
+    @property
+    def triangle_origin(self) -> np.ndarray:
+        """Progressive triangle -> welded input triangle."""
+        return self._pm.triangle_origin
+
+    @property
+    def vertex_map(self) -> np.ndarray:
+        """Input vertex -> welded vertex (2**32 - 1 when unused)."""
+        return self._pm.vertex_map
+
+    @property
+    def triangle_map(self) -> np.ndarray:
+        """Welded triangle -> input triangle."""
+        return self._pm.triangle_map
+
+
+@dataclass(frozen=True)
+class SimplifyResult:
+    """What :func:`simplify` returns: the levels (in the order asked), the
+    progressive mesh they were cut from, and a note when the simplification
+    stopped before the coarsest level (empty otherwise)."""
+
+    levels: List[Level]
+    progressive: ProgressiveMesh
+    note: str
+
+
+def simplify(
+    vertices: Any,
+    faces: Any = None,
+    levels: Union[Sequence[Union[float, int, str]], str] = (0.5, 0.1, 0.02),
+    **options: Any,
+) -> SimplifyResult:
+    """Build levels of detail of one mesh in one simplification pass and
+    measure each against the input.
+
+    ``vertices``: (n, 3) float32/float64 (computed in float32), ``faces``:
+    (m, 3) integers; or a ``trimesh.Trimesh`` / ``(vertices, faces)`` as the
+    first argument. ``levels``: ratios of the input's triangles (floats in
+    (0, 1], or ``"50%"``) or triangle counts (ints); ``max_error=[0.1, 0.5]``
+    builds levels by measured error (% of the bounding-box diagonal)
+    instead. Other options are the command's flags (``tau``, ``boundary``,
+    ``placement``, ``schedule``, ``method``, ``samples``, ...).
+
+    Levels come finest first (as the command writes them), whatever the
+    order asked. Each level's vertices have the input's float dtype, faces
+    are int64.
+    """
+    v, f, dtype = _mesh_arrays(vertices, faces)
+    if "max_error" not in options:
+        options = {"levels": levels, **options}
+    out, pm, note = _lodgen.simplify(v, f, _argv(options))
+    as_dtype = np.float64 if dtype == np.float64 else np.float32
+    result = [
+        Level(lv.astype(as_dtype, copy=False), lf.astype(np.int64), s, Errors._from(e))
+        for lv, lf, e, s in out
+    ]
+    return SimplifyResult(result, ProgressiveMesh(_native=pm), note)
+
+
+def measure(a: MeshLike, b: MeshLike, samples: float = 2.0) -> Errors:
+    """Distance between two meshes (each a trimesh.Trimesh or a
+    ``(vertices, faces)`` tuple), as ``lodgen measure A B``: one-sided and
+    symmetric Hausdorff, mean and RMS; ``samples`` area samples per
+    triangle of the larger mesh, plus every vertex."""
+    av, af, _ = _mesh_arrays(a)
+    bv, bf, _ = _mesh_arrays(b)
+    return Errors._from(_lodgen.measure(av, af, bv, bf, float(samples)))
+
+
+def build(
+    path_in: Union[str, os.PathLike],
+    path_out: Union[str, os.PathLike, None] = None,
+    *,
+    threads: Optional[int] = None,
+    **cli_options: Any,
+) -> dict:
+    """``lodgen PATH_IN -o PATH_OUT **cli_options`` for one file (same
+    bytes as the command), without printing. Returns the file's report (the
+    command's ``--report`` JSON) as a dict. ``threads`` limits the file's
+    own threads (default: every core). ``report="x.json"`` also writes it."""
+    text = _lodgen.build(
+        os.fspath(path_in),
+        None if path_out is None else os.fspath(path_out),
+        _argv(cli_options),
+        threads,
+    )
+    return json.loads(text)
+
+
+def expand_inputs(
+    inputs: Iterable[Union[str, os.PathLike]], out_dir: Union[str, os.PathLike]
+) -> List[Tuple[str, str]]:
+    """Batch mode's inputs (files, directories walked recursively, glob
+    patterns) as (input, output) pairs, outputs under ``out_dir`` in the
+    command's relative layout."""
+    pairs = _lodgen.expand([os.fspath(i) for i in inputs], os.fspath(out_dir))
+    return [(str(i), os.path.join(os.fspath(out_dir), str(r))) for i, r in pairs]
+
+
+def batch(
+    inputs: Iterable[Union[str, os.PathLike]],
+    out_dir: Union[str, os.PathLike],
+    **cli_options: Any,
+) -> dict:
+    """``lodgen INPUTS... --out-dir OUT_DIR **cli_options`` (``jobs``,
+    ``force``, ...) without printing. Returns the batch report (every
+    file's status, error, time and report); failed files are in it, not
+    raised."""
+    text = _lodgen.batch(
+        [os.fspath(i) for i in inputs], os.fspath(out_dir), _argv(cli_options)
+    )
+    return json.loads(text)

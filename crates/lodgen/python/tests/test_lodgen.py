@@ -1,0 +1,217 @@
+"""The Python package: arrays in and out, levels, the progressive mesh,
+measured errors against the command's, exceptions, the GIL."""
+
+import json
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lodgen
+from conftest import torus, write_obj
+
+
+def triangle_set(vertices, faces):
+    """Triangles as sorted tuples of corner coordinates, each rotated to
+    start at its smallest corner (orientation kept)."""
+    out = []
+    for t in faces:
+        corners = [tuple(np.float32(vertices[i]).tolist()) for i in t]
+        k = corners.index(min(corners))
+        out.append(tuple(corners[k:] + corners[:k]))
+    return sorted(out)
+
+
+def test_arrays_round_trip_at_full_resolution():
+    v, f = torus(n=24, m=12)
+    r = lodgen.simplify(v, f, levels=[1.0])
+    (level,) = r.levels
+    assert level.vertices.dtype == np.float64 and level.faces.dtype == np.int64
+    assert level.vertices.shape == v.shape and level.faces.shape == f.shape
+    assert triangle_set(level.vertices, level.faces) == triangle_set(v, f)
+    assert level.errors.hausdorff < 1e-12 * level.errors.diagonal
+    # float32 in, float32 out
+    r32 = lodgen.simplify(v.astype(np.float32), f.astype(np.int32), levels=[1.0])
+    assert r32.levels[0].vertices.dtype == np.float32
+
+
+def test_levels_reach_their_counts_and_errors_grow():
+    v, f = torus()
+    r = lodgen.simplify(v, f, levels=[0.5, 0.1, 2000, 100])
+    counts = [len(l.faces) for l in r.levels]
+    # finest first, whatever the order asked
+    targets = [2000, len(f) // 2, len(f) // 10, 100]
+    for c, t in zip(counts, targets):
+        assert t - 2 <= c <= t, (counts, targets)
+    errors = [l.errors.hausdorff_percent for l in r.levels]
+    assert errors == sorted(errors) and errors[-1] > 0
+    assert r.note == ""
+    for l in r.levels:
+        assert l.faces.min() >= 0 and l.faces.max() < len(l.vertices)
+        v_l, f_l = r.progressive.mesh_at_splits(l.splits)
+        assert len(f_l) == len(l.faces)
+    # max_error levels stay within their bounds
+    r = lodgen.simplify(v, f, max_error=[0.5, 2.0])
+    for l, bound in zip(r.levels, [0.5, 2.0]):
+        assert l.errors.hausdorff_percent <= bound
+
+
+def test_progressive_mesh_replays_to_the_input_exactly():
+    v, f = torus(n=32, m=16)
+    pm = lodgen.ProgressiveMesh(v, f)
+    assert len(pm) > 0 and pm.applied == 0
+    base_v, base_f = pm.mesh
+    assert len(base_f) == pm.triangle_counts[0] < len(f)
+    # Refine all the way: the input, index for index through the welding
+    # maps (input vertex -> welded vertex, welded triangle -> input one).
+    assert pm.refine(len(pm) + 10) == len(pm)
+    fv, ff = pm.full_in_input_order()
+    vm, tm = pm.vertex_map, pm.triangle_map
+    np.testing.assert_array_equal(fv[vm], v.astype(np.float32))
+    assert len(tm) == len(f) and sorted(tm) == list(range(len(f)))
+    np.testing.assert_array_equal(ff, vm[f[tm]])
+    cv, cf = pm.mesh
+    assert triangle_set(cv, cf) == triangle_set(v, f)
+    # Coarsen back to the base, exactly.
+    assert pm.coarsen(len(pm)) == len(pm)
+    bv, bf = pm.mesh
+    np.testing.assert_array_equal(bv, base_v)
+    np.testing.assert_array_equal(bf, base_f)
+    # mesh_at and the cursor agree at every count asked.
+    for t in [len(base_f), 300, 1000, len(f)]:
+        k = pm._pm.splits_for_triangles(t)
+        pm.seek(k)
+        mv, mf = pm.mesh_at(t)
+        np.testing.assert_array_equal(mf, pm.mesh[1])
+        np.testing.assert_array_equal(mv, pm.mesh[0])
+        assert len(mf) <= max(t, len(base_f))
+
+
+def test_splits_structured_array_rebuilds_every_mesh():
+    v, f = torus(n=16, m=8)
+    pm = lodgen.ProgressiveMesh(v, f)
+    s = pm.splits
+    assert s.dtype == lodgen.SPLIT_DTYPE and len(s) == len(pm)
+    # Replay the splits in NumPy (vertex positions and restored faces;
+    # corner moves are not in the array, so compare positions and counts).
+    pos, tris = (np.array(a) for a in pm.mesh_at_splits(0))
+    pos = list(map(tuple, pos))
+    ntri = int(len(tris))
+    for k, x in enumerate(s):
+        assert x["v0"] == len(pos)
+        pos[x["v1"]] = tuple(x["p1"])
+        pos.append(tuple(x["p0"]))
+        ntri += int(x["n_faces"])
+    fv, ff = pm.mesh_at_splits(len(pm))
+    np.testing.assert_array_equal(np.array(pos, dtype=np.float32), fv)
+    assert ntri == len(ff) == len(f)
+    np.testing.assert_array_equal(pm.triangle_counts, np.cumsum([len(pm.mesh_at_splits(0)[1])] + list(s["n_faces"])))
+
+
+def test_trimesh_input_and_measure():
+    trimesh = pytest.importorskip("trimesh")
+    v, f = torus()
+    mesh = trimesh.Trimesh(v, f, process=False)
+    r = lodgen.simplify(mesh, levels=[0.1])
+    r2 = lodgen.simplify(v, f, levels=[0.1])
+    np.testing.assert_array_equal(r.levels[0].faces, r2.levels[0].faces)
+    coarse = r.levels[0].to_trimesh()
+    m = lodgen.measure(mesh, coarse)
+    assert m.hausdorff == pytest.approx(r.levels[0].errors.hausdorff, rel=1e-9)
+    assert m.rms == pytest.approx(r.levels[0].errors.rms, rel=1e-9)
+    same = lodgen.measure((v, f), (v, f))
+    assert same.hausdorff < 1e-12
+
+
+def test_errors_match_the_command(tmp_path, lodgen_bin):
+    v, f = torus()
+    obj = tmp_path / "torus.obj"
+    write_obj(obj, v, f)
+    report = tmp_path / "r.json"
+    subprocess.run(
+        [lodgen_bin, str(obj), "-o", str(tmp_path / "cli.glb"), "--levels", "50%,10%,2%",
+         "--report", str(report), "-q"],
+        check=True,
+    )
+    cli = json.loads(report.read_text())["meshes"][0]["levels"]
+    # Same mesh as read from the OBJ (its text round-trips float64 -> f32).
+    r = lodgen.simplify(v.astype(np.float32), f, levels=[0.5, 0.1, 0.02])
+    assert [len(l.faces) for l in r.levels] == [c["triangles"] for c in cli]
+    for l, c in zip(r.levels, cli):
+        assert l.errors.hausdorff_percent == pytest.approx(c["hausdorff_percent"], rel=1e-12)
+        assert l.errors.rms_percent == pytest.approx(c["rms_percent"], rel=1e-12)
+    # build() writes the command's bytes and returns its report.
+    rep = lodgen.build(obj, tmp_path / "py.glb", levels=[0.5, 0.1, 0.02])
+    assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+    assert rep["meshes"][0]["levels"] == cli
+
+
+def test_bad_input_raises_with_the_commands_message(tmp_path, lodgen_bin):
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [np.nan, 0, 1]], dtype=np.float64)
+    with pytest.raises(lodgen.LodgenError, match=r"vertex 3 has a non-finite coordinate"):
+        lodgen.simplify(v, [[0, 1, 2], [0, 2, 3]])
+    good = v[:3]
+    with pytest.raises(lodgen.LodgenError, match=r"triangle 0 refers to vertex 5, but there are only 3 vertices"):
+        lodgen.simplify(good, [[0, 1, 5]])
+    with pytest.raises(lodgen.LodgenError, match=r"refers to vertex -1"):
+        lodgen.simplify(good, [[0, 1, -1]])
+    with pytest.raises(lodgen.LodgenError, match=r"shape"):
+        lodgen.simplify(good[:, :2], [[0, 1, 2]])
+    with pytest.raises(lodgen.LodgenError, match=r"integer"):
+        lodgen.simplify(good, [[0.0, 1.0, 2.0]])
+    assert issubclass(lodgen.LodgenError, ValueError)
+    # Options: the command's own messages.
+    vt, ft = torus(n=8, m=4)
+    for opts, flag in [({"levels": [2.0]}, "--levels"), ({"tau": "abc"}, "--tau"),
+                       ({"boundary": "sideways"}, "--boundary")]:
+        with pytest.raises(lodgen.LodgenError) as e:
+            lodgen.simplify(vt, ft, **opts)
+        value = opts[next(iter(opts))]
+        arg = ",".join(map(str, value)) if isinstance(value, list) else value
+        cli = subprocess.run([lodgen_bin, "x.obj", flag, arg], capture_output=True, text=True)
+        assert cli.returncode != 0
+        first = cli.stderr.splitlines()[0].removeprefix("error: ")
+        assert first.split(" [")[0].split("\n")[0] in str(e.value) or str(e.value) in cli.stderr, (str(e.value), cli.stderr)
+    # A broken file: build() raises what the command prints.
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    cli = subprocess.run([lodgen_bin, str(bad), "-o", str(tmp_path / "b.glb")], capture_output=True, text=True)
+    with pytest.raises(lodgen.LodgenError) as e:
+        lodgen.build(bad, tmp_path / "b.glb")
+    for line in cli.stderr.splitlines():
+        line = line.strip().removeprefix("error: ").removeprefix("caused by: ")
+        assert line in str(e.value)
+    assert not (tmp_path / "b.glb").exists()
+
+
+def test_the_gil_is_released_during_a_long_simplify():
+    v, f = torus(n=400, m=200)  # 160k triangles
+    ticks = [0]
+    stop = threading.Event()
+
+    def spin():
+        while not stop.is_set():
+            ticks[0] += 1
+
+    during = {}
+
+    def work():
+        before = ticks[0]
+        t0 = time.perf_counter()
+        lodgen.simplify(v, f, levels=[0.01])
+        during["ticks"] = ticks[0] - before
+        during["seconds"] = time.perf_counter() - t0
+
+    t = threading.Thread(target=spin)
+    t.start()
+    try:
+        work()
+    finally:
+        stop.set()
+        t.join()
+    # With the GIL held for the whole call the spinning thread would get no
+    # (or a handful of) increments in between.
+    assert during["seconds"] > 0.05
+    assert during["ticks"] > 10000, during

@@ -1,0 +1,530 @@
+//! The Python extension module `lodgen._lodgen` (cargo feature `python`,
+//! built by maturin from `crates/lodgen/pyproject.toml`). The Python package
+//! `lodgen` (crates/lodgen/python/lodgen) wraps it: keyword options become
+//! the command line's flags, parsed here by the CLI's own [`BuildArgs`], so
+//! options, defaults and error messages are the command's.
+//!
+//! Every call copies its NumPy inputs, then releases the GIL
+//! (`Python::detach`) for the work. Errors raise `lodgen.LodgenError` (a
+//! `ValueError`) with the CLI's message, causes joined by ": ".
+
+use crate::cli::{self, BuildArgs};
+use crate::lod;
+use crate::scene::{Primitive, Scene, SourceMesh};
+use clap::Parser;
+use lodgen_pm::metric::measure::{measure as measure_meshes, ErrorReport, MeasureOptions};
+use lodgen_pm::metric::MeshRef;
+use lodgen_pm::{Cursor, Mesh, ProgressiveMesh};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+pyo3::create_exception!(
+    lodgen,
+    LodgenError,
+    PyValueError,
+    "A mesh, option or file lodgen cannot use; the message is the command line's."
+);
+
+/// The command line's build arguments, parsed from `argv` (without the
+/// program name).
+#[derive(Parser, Debug)]
+#[command(name = "lodgen")]
+struct Options {
+    #[command(flatten)]
+    build: BuildArgs,
+}
+
+fn parse(argv: Vec<String>) -> PyResult<BuildArgs> {
+    let args = std::iter::once("lodgen".to_string()).chain(argv);
+    Options::try_parse_from(args).map(|o| o.build).map_err(|e| {
+        let text = e.to_string();
+        let first = text.lines().next().unwrap_or_default();
+        LodgenError::new_err(first.trim_start_matches("error: ").to_string())
+    })
+}
+
+/// The CLI's error chain on one line; a cause whose text its parent
+/// already ends with is left out.
+fn error(e: anyhow::Error) -> PyErr {
+    let mut parts: Vec<String> = Vec::new();
+    for c in e.chain() {
+        let text = c.to_string();
+        if !parts.last().is_some_and(|p| p.ends_with(&text)) {
+            parts.push(text);
+        }
+    }
+    LodgenError::new_err(parts.join(": "))
+}
+
+type Arrays<'py> = (
+    Bound<'py, numpy::PyArray2<f32>>,
+    Bound<'py, numpy::PyArray2<u32>>,
+);
+
+fn arrays<'py>(
+    py: Python<'py>,
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+) -> PyResult<Arrays<'py>> {
+    let v =
+        PyArray1::from_vec(py, positions.as_flattened().to_vec()).reshape([positions.len(), 3])?;
+    let f =
+        PyArray1::from_vec(py, triangles.as_flattened().to_vec()).reshape([triangles.len(), 3])?;
+    Ok((v, f))
+}
+
+/// Vertices (n, 3) float32 and faces (m, 3) int64 (C-contiguous; the
+/// Python side converts) into the core's types.
+fn mesh_in(
+    vertices: &PyReadonlyArray2<'_, f32>,
+    faces: &PyReadonlyArray2<'_, i64>,
+) -> PyResult<(Vec<[f32; 3]>, Vec<u32>)> {
+    if vertices.shape()[1] != 3 || faces.shape()[1] != 3 {
+        return Err(LodgenError::new_err(format!(
+            "vertices must have shape (n, 3) and faces (m, 3), not {:?} and {:?}",
+            vertices.shape(),
+            faces.shape()
+        )));
+    }
+    let v = vertices
+        .as_slice()
+        .map_err(|e| LodgenError::new_err(e.to_string()))?;
+    let f = faces
+        .as_slice()
+        .map_err(|e| LodgenError::new_err(e.to_string()))?;
+    let n = v.len() / 3;
+    let mut indices = Vec::with_capacity(f.len());
+    for (k, &i) in f.iter().enumerate() {
+        // The readers check indices before the LOD builder sees them; so
+        // does this (the core's message).
+        if i < 0 || i >= n as i64 {
+            return Err(LodgenError::new_err(format!(
+                "triangle {} refers to vertex {i}, but there are only {n} vertices",
+                k / 3
+            )));
+        }
+        indices.push(i as u32);
+    }
+    Ok((
+        v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        indices,
+    ))
+}
+
+/// An error report as the tuple the Python side names: diagonal, then
+/// symmetric Hausdorff, mean, RMS, then A→B max, mean, RMS, samples, then
+/// B→A max, mean, RMS, samples (mesh units).
+fn report_tuple(r: &ErrorReport) -> Vec<f64> {
+    vec![
+        r.diagonal,
+        r.hausdorff(),
+        r.mean(),
+        r.rms(),
+        r.a_to_b.max,
+        r.a_to_b.mean,
+        r.a_to_b.rms,
+        r.a_to_b.samples as f64,
+        r.b_to_a.max,
+        r.b_to_a.mean,
+        r.b_to_a.rms,
+        r.b_to_a.samples as f64,
+    ]
+}
+
+type LevelOut<'py> = (
+    Bound<'py, numpy::PyArray2<f32>>,
+    Bound<'py, numpy::PyArray2<u32>>,
+    Vec<f64>,
+    usize,
+);
+
+/// `simplify(vertices, faces, argv)`: the CLI's LOD build of one mesh.
+/// Returns per level (vertices, faces, error tuple, splits), the
+/// progressive mesh the levels were cut from, and the stop note (empty
+/// when every level was reached).
+#[pyfunction]
+fn simplify<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f32>,
+    faces: PyReadonlyArray2<'py, i64>,
+    argv: Vec<String>,
+) -> PyResult<(Vec<LevelOut<'py>>, PyProgressiveMesh, String)> {
+    let args = parse(argv)?;
+    let (positions, indices) = mesh_in(&vertices, &faces)?;
+    let scene = Scene {
+        meshes: vec![SourceMesh {
+            name: String::new(),
+            primitives: vec![Primitive {
+                positions,
+                indices,
+                ..Primitive::default()
+            }],
+        }],
+        ..Scene::default()
+    };
+    let build = py
+        .detach(|| -> anyhow::Result<lod::MeshBuild> {
+            let opts = args.build_options()?;
+            let builds = lod::build_lods(&scene, &opts, &mut |_| {})
+                .map_err(anyhow::Error::from)
+                .map_err(|e| e.context("simplifying"))?;
+            builds
+                .into_iter()
+                .next()
+                .ok_or_else(|| anyhow::anyhow!("simplifying: the mesh has no triangles"))
+        })
+        .map_err(error)?;
+    let mut levels = Vec::new();
+    for ((l, e), s) in build
+        .lod
+        .levels
+        .iter()
+        .zip(&build.errors)
+        .zip(&build.level_splits)
+    {
+        let mut positions: Vec<[f32; 3]> = Vec::new();
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for p in &l.primitives {
+            let off = positions.len() as u32;
+            positions.extend_from_slice(&p.positions);
+            triangles.extend(
+                p.indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0] + off, c[1] + off, c[2] + off]),
+            );
+        }
+        let (v, f) = arrays(py, &positions, &triangles)?;
+        levels.push((v, f, report_tuple(e), *s));
+    }
+    let st = &build.simplified;
+    let note = if st.stop == lodgen_pm::StopReason::Target {
+        String::new()
+    } else {
+        cli::stop_note(st.stop, &st.stats)
+    };
+    let simplified = build.simplified;
+    Ok((
+        levels,
+        PyProgressiveMesh::new(
+            simplified.pm,
+            simplified.vertex_map,
+            simplified.triangle_map,
+        ),
+        note,
+    ))
+}
+
+/// `progressive(vertices, faces, argv, target_triangles)`: simplify as far
+/// as possible (or to the target) and keep the whole vertex-split log.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, argv, target_triangles=None))]
+fn progressive<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f32>,
+    faces: PyReadonlyArray2<'py, i64>,
+    argv: Vec<String>,
+    target_triangles: Option<usize>,
+) -> PyResult<PyProgressiveMesh> {
+    let args = parse(argv)?;
+    let (positions, indices) = mesh_in(&vertices, &faces)?;
+    let s = py
+        .detach(|| -> anyhow::Result<lodgen_pm::Simplified> {
+            let mut opts = args.build_options()?.simplify;
+            if let Some(t) = target_triangles {
+                opts = opts.with_target_triangles(t);
+            }
+            lodgen_pm::simplify(&positions, &indices, &opts)
+                .map_err(|e| anyhow::Error::from(e).context("simplifying"))
+        })
+        .map_err(error)?;
+    Ok(PyProgressiveMesh::new(s.pm, s.vertex_map, s.triangle_map))
+}
+
+/// `measure(av, af, bv, bf, samples)`: the distance between two meshes,
+/// as the tuple of [`report_tuple`].
+#[pyfunction]
+fn measure<'py>(
+    py: Python<'py>,
+    av: PyReadonlyArray2<'py, f32>,
+    af: PyReadonlyArray2<'py, i64>,
+    bv: PyReadonlyArray2<'py, f32>,
+    bf: PyReadonlyArray2<'py, i64>,
+    samples: f64,
+) -> PyResult<Vec<f64>> {
+    if !(samples > 0.0 && samples.is_finite()) {
+        return Err(LodgenError::new_err("--samples must be positive"));
+    }
+    let (ap, ai) = mesh_in(&av, &af)?;
+    let (bp, bi) = mesh_in(&bv, &bf)?;
+    let tri =
+        |i: &[u32]| -> Vec<[u32; 3]> { i.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect() };
+    let (at, bt) = (tri(&ai), tri(&bi));
+    let r = py
+        .detach(|| {
+            measure_meshes(
+                MeshRef::new(&ap, &at),
+                MeshRef::new(&bp, &bt),
+                &MeasureOptions::DEFAULT.with_samples_per_triangle(samples),
+            )
+        })
+        .map_err(|e| error(anyhow::Error::from(e).context("measuring")))?;
+    Ok(report_tuple(&r))
+}
+
+/// `build(input, output, argv, threads)`: `lodgen INPUT -o OUTPUT
+/// FLAGS...` without printing, on a pool of `threads` threads (default: all
+/// cores); returns the file's `--report` JSON.
+#[pyfunction]
+#[pyo3(signature = (input, output, argv, threads=None))]
+fn build(
+    py: Python<'_>,
+    input: PathBuf,
+    output: Option<PathBuf>,
+    argv: Vec<String>,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    let args = parse(argv)?;
+    let output = output.unwrap_or_else(|| cli::default_output(&input));
+    py.detach(|| -> anyhow::Result<String> {
+        if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent)?;
+        }
+        let run = || cli::build_file(&input, &output, &args, &mut |_| {});
+        let built = match threads {
+            Some(n) => rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()?
+                .install(run)?,
+            None => run()?,
+        };
+        if let Some(path) = &args.report {
+            cli::write_atomically(
+                path,
+                serde_json::to_string_pretty(&built.report_json(&input))?.as_bytes(),
+            )?;
+        }
+        Ok(serde_json::to_string(&built.report_json(&input))?)
+    })
+    .map_err(error)
+}
+
+/// `batch(inputs, out_dir, argv)`: `lodgen INPUTS... --out-dir DIR` without
+/// printing; returns the batch `--report` JSON (failures are in it).
+#[pyfunction]
+fn batch(
+    py: Python<'_>,
+    inputs: Vec<PathBuf>,
+    out_dir: PathBuf,
+    argv: Vec<String>,
+) -> PyResult<String> {
+    let mut args = parse(argv)?;
+    args.inputs = inputs;
+    args.batch.out_dir = Some(out_dir.clone());
+    py.detach(|| -> anyhow::Result<String> {
+        if args.batch.jobs == 0 {
+            anyhow::bail!("--jobs must be at least 1");
+        }
+        let inputs = crate::batch::expand_inputs(&args.inputs, Some(&out_dir))?;
+        let outcome = crate::batch::run_batch(&inputs, &out_dir, &args, &|_, _| {})?;
+        Ok(serde_json::to_string(&outcome.report_json())?)
+    })
+    .map_err(error)
+}
+
+/// `expand(inputs, out_dir)`: batch mode's inputs (files, directories,
+/// globs) with each output's path relative to `out_dir`, in batch order.
+#[pyfunction]
+fn expand(inputs: Vec<PathBuf>, out_dir: PathBuf) -> PyResult<Vec<(PathBuf, PathBuf)>> {
+    let list = crate::batch::expand_inputs(&inputs, Some(&out_dir)).map_err(error)?;
+    Ok(list
+        .into_iter()
+        .map(|i| (i.input, i.relative_output))
+        .collect())
+}
+
+self_cell::self_cell!(
+    struct PmCell {
+        owner: ProgressiveMesh,
+        #[covariant]
+        dependent: Cursor,
+    }
+);
+
+/// A progressive mesh with a cursor (native part of
+/// `lodgen.ProgressiveMesh`).
+#[pyclass(module = "lodgen._lodgen", name = "ProgressiveMesh")]
+pub struct PyProgressiveMesh {
+    cell: PmCell,
+    vertex_map: Vec<u32>,
+    triangle_map: Vec<u32>,
+}
+
+impl PyProgressiveMesh {
+    fn new(pm: ProgressiveMesh, vertex_map: Vec<u32>, triangle_map: Vec<u32>) -> Self {
+        PyProgressiveMesh {
+            cell: PmCell::new(pm, |pm| pm.cursor()),
+            vertex_map,
+            triangle_map,
+        }
+    }
+}
+
+fn u32s<'py>(py: Python<'py>, v: &[u32]) -> Bound<'py, PyArray1<u32>> {
+    PyArray1::from_vec(py, v.to_vec())
+}
+
+#[pymethods]
+impl PyProgressiveMesh {
+    fn __len__(&self) -> usize {
+        self.cell.borrow_owner().len()
+    }
+
+    /// Splits applied at the cursor.
+    #[getter]
+    fn applied(&self) -> usize {
+        self.cell.borrow_dependent().applied()
+    }
+
+    fn triangle_counts<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
+        let c: Vec<u64> = self
+            .cell
+            .borrow_owner()
+            .triangle_counts()
+            .into_iter()
+            .map(|n| n as u64)
+            .collect();
+        PyArray1::from_vec(py, c)
+    }
+
+    fn splits_for_triangles(&self, triangles: usize) -> usize {
+        self.cell.borrow_owner().splits_for_triangles(triangles)
+    }
+
+    fn mesh_at_splits<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Arrays<'py>> {
+        let pm = self.cell.borrow_owner();
+        let m: Mesh = py.detach(|| pm.mesh_at_splits(k));
+        arrays(py, &m.positions, &m.triangles)
+    }
+
+    fn full_in_input_order<'py>(&self, py: Python<'py>) -> PyResult<Arrays<'py>> {
+        let pm = self.cell.borrow_owner();
+        let m: Mesh = py.detach(|| pm.full_in_input_order());
+        arrays(py, &m.positions, &m.triangles)
+    }
+
+    fn mesh<'py>(&self, py: Python<'py>) -> PyResult<Arrays<'py>> {
+        let m = self.cell.borrow_dependent().mesh();
+        arrays(py, &m.positions, &m.triangles)
+    }
+
+    fn refine(&mut self, py: Python<'_>, n: usize) -> usize {
+        let cell = &mut self.cell;
+        py.detach(|| cell.with_dependent_mut(|_, c| c.refine(n)))
+    }
+
+    fn coarsen(&mut self, py: Python<'_>, n: usize) -> usize {
+        let cell = &mut self.cell;
+        py.detach(|| cell.with_dependent_mut(|_, c| c.coarsen(n)))
+    }
+
+    fn seek(&mut self, py: Python<'_>, k: usize) {
+        let cell = &mut self.cell;
+        let len = cell.borrow_owner().len();
+        py.detach(|| cell.with_dependent_mut(|_, c| c.seek(k.min(len))))
+    }
+
+    #[getter]
+    fn vertex_origin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        u32s(py, &self.cell.borrow_owner().vertex_origin)
+    }
+
+    #[getter]
+    fn triangle_origin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        u32s(py, &self.cell.borrow_owner().triangle_origin)
+    }
+
+    #[getter]
+    fn vertex_map<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        u32s(py, &self.vertex_map)
+    }
+
+    #[getter]
+    fn triangle_map<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        u32s(py, &self.triangle_map)
+    }
+
+    /// The splits as columns: v1, v0 (u32), p1, p_merged, p0 (n×3 f32 flat),
+    /// faces (n×2×3 u32 flat, unused rows u32::MAX), n_faces (u8),
+    /// n_corners (u32), error (f32).
+    #[allow(clippy::type_complexity)]
+    fn split_columns<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u8>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<f32>>,
+    ) {
+        let s = &self.cell.borrow_owner().splits;
+        let n = s.len();
+        let (mut v1, mut v0) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut p1, mut pm, mut p0) = (
+            Vec::with_capacity(3 * n),
+            Vec::with_capacity(3 * n),
+            Vec::with_capacity(3 * n),
+        );
+        let mut faces = Vec::with_capacity(6 * n);
+        let (mut nf, mut nc, mut err) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        for x in s {
+            v1.push(x.v1);
+            v0.push(x.v0);
+            p1.extend_from_slice(&x.p1);
+            pm.extend_from_slice(&x.p_merged);
+            p0.extend_from_slice(&x.p0);
+            for k in 0..2 {
+                faces.extend_from_slice(&x.faces.get(k).copied().unwrap_or([u32::MAX; 3]));
+            }
+            nf.push(x.faces.len() as u8);
+            nc.push(x.corners.len() as u32);
+            err.push(x.error);
+        }
+        (
+            PyArray1::from_vec(py, v1),
+            PyArray1::from_vec(py, v0),
+            PyArray1::from_vec(py, p1),
+            PyArray1::from_vec(py, pm),
+            PyArray1::from_vec(py, p0),
+            PyArray1::from_vec(py, faces),
+            PyArray1::from_vec(py, nf),
+            PyArray1::from_vec(py, nc),
+            PyArray1::from_vec(py, err),
+        )
+    }
+}
+
+/// The native module: `lodgen._lodgen`.
+#[pymodule]
+fn _lodgen(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("LodgenError", m.py().get_type::<LodgenError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<PyProgressiveMesh>()?;
+    m.add_function(wrap_pyfunction!(simplify, m)?)?;
+    m.add_function(wrap_pyfunction!(progressive, m)?)?;
+    m.add_function(wrap_pyfunction!(measure, m)?)?;
+    m.add_function(wrap_pyfunction!(build, m)?)?;
+    m.add_function(wrap_pyfunction!(batch, m)?)?;
+    m.add_function(wrap_pyfunction!(expand, m)?)?;
+    Ok(())
+}
