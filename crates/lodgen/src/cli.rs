@@ -391,18 +391,22 @@ pub struct BuiltFile {
     pub scene: Scene,
     pub builds: Vec<MeshBuild>,
     pub level_bytes: Vec<Vec<u64>>,
+    /// Wall time of reading, building (all meshes) and writing.
+    pub times: crate::summary::FileTimes,
 }
 
 impl BuiltFile {
     /// The JSON `--report` of this file.
     pub fn report_json(&self, input: &Path) -> serde_json::Value {
-        report_json(
+        let mut report = report_json(
             input,
             &self.output,
             &self.scene,
             &self.builds,
             &self.level_bytes,
-        )
+        );
+        crate::summary::extend_report(&mut report, self);
+        report
     }
 }
 
@@ -418,9 +422,14 @@ pub fn build_file(
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }
+    let t_read = Instant::now();
     let scene = io::read_scene(input).with_context(|| format!("reading {}", input.display()))?;
+    let read = t_read.elapsed();
+    let t_build = Instant::now();
     let builds = lod::build_lods(&scene, &opts, on_progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
+    let build = t_build.elapsed();
+    let t_write = Instant::now();
     let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
     let summary = gltf_out::write_lods(output, &scene, &lods, &args.write_options())
         .with_context(|| format!("writing {}", output.display()))?;
@@ -435,6 +444,7 @@ pub fn build_file(
             .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
     }
     // --- end LODGEN_progressive ---
+    let write = t_write.elapsed();
     let level_bytes: Vec<Vec<u64>> = summary
         .meshes
         .iter()
@@ -445,6 +455,7 @@ pub fn build_file(
         scene,
         builds,
         level_bytes,
+        times: crate::summary::FileTimes { read, build, write },
     })
 }
 
@@ -480,13 +491,7 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
     if !args.quiet {
         print!("{}", table(builds, level_bytes));
         if args.verbose {
-            for b in builds {
-                eprintln!("{}: {:#?}", b.lod.name, b.simplified.stats);
-                eprintln!(
-                    "{}: stopped: {:?}; prepare: {:?}",
-                    b.lod.name, b.simplified.stop, b.simplified.prepare
-                );
-            }
+            eprint!("{}", crate::summary::verbose(&built, elapsed));
         }
         println!(
             "wrote {} in {:.2} s",

@@ -13,4 +13,5 @@ pub mod progressive;
 #[cfg(feature = "python")]
 pub mod python;
 pub mod scene;
+pub mod summary;
 pub mod view;

@@ -36,6 +36,7 @@ use lodgen_pm::{
     SimplifyOptions,
 };
 use std::collections::BTreeMap;
+use std::time::Instant;
 use thiserror::Error;
 
 /// Which levels to build.
@@ -145,6 +146,21 @@ pub struct MeshBuild {
     pub level_splits: Vec<usize>,
     /// Measured error of each level against the welded input, finest first.
     pub errors: Vec<ErrorReport>,
+    /// Wall time of the simplification (preparation included) and of the
+    /// error measurement (the original's hierarchy included).
+    pub times: BuildTimes,
+}
+
+/// Where a mesh's build time went (wall clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BuildTimes {
+    /// Weld, clean and simplify (the core's phases and its preparation).
+    pub simplify: std::time::Duration,
+    /// Measure every level against the original (and search levels by error).
+    pub measure: std::time::Duration,
+    /// The whole build of this mesh: the above plus flattening, level
+    /// extraction and attribute fitting.
+    pub total: std::time::Duration,
 }
 
 /// Progress events, for a progress bar.
@@ -518,6 +534,7 @@ pub fn build_one(
     // QEM runs on wedges (seams and attributes kept); the curvature-adaptive
     // methods see positions only, and their levels take attributes from the
     // first input vertex of each position.
+    let t_build = Instant::now();
     let simplified = if opts.method == Method::Qem {
         simplify_wedged(mesh, &flat, &sopts, &opts.attribute_weights)
     } else {
@@ -530,16 +547,22 @@ pub fn build_one(
         )
     }
     .map_err(mesh_err)?;
+    let simplify_time = t_build.elapsed();
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();
     // The original's hierarchy and sample order, built once for every level.
+    let t_measure = Instant::now();
     let reference = Reference::new(MeshRef::new(&full.positions, &full.triangles))
         .map_err(|e| measure_err(MeasureError::A(e)))?;
+    let measure_time = std::cell::Cell::new(t_measure.elapsed());
     let measure_mesh = |m: &lodgen_pm::Mesh, mopts: &MeasureOptions| {
-        reference
+        let t = Instant::now();
+        let r = reference
             .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
-            .map_err(|e| measure_err(MeasureError::B(e)))
+            .map_err(|e| measure_err(MeasureError::B(e)));
+        measure_time.set(measure_time.get() + t.elapsed());
+        r
     };
     let measure_at = |k: usize, mopts: &MeasureOptions| -> Result<ErrorReport, BuildError> {
         measure_mesh(&pm.mesh_at_splits(k), mopts)
@@ -638,6 +661,11 @@ pub fn build_one(
         simplified,
         level_splits: splits,
         errors,
+        times: BuildTimes {
+            simplify: simplify_time,
+            measure: measure_time.get(),
+            total: t_build.elapsed(),
+        },
     })
 }
 

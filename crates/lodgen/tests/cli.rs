@@ -441,3 +441,64 @@ fn output_does_not_depend_on_the_thread_count() {
     }
     assert!(outs[0] == outs[1], "1 and 3 threads wrote different files");
 }
+
+/// `-v` prints tables in words (phases with their share, refusals, what
+/// preparation removed), never a Rust `Debug` dump, and `--report` carries
+/// the same data.
+#[test]
+fn verbose_prints_tables_and_the_report_carries_them() {
+    let d = tmp("verbose");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let rep = d.join("r.json");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "-v",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    for want in [
+        "time by phase",
+        "read",
+        "contractions",
+        "measure",
+        "write",
+        "total",
+        "stopped: reached the target",
+        "preparation removed",
+    ] {
+        assert!(err.contains(want), "-v lacks {want:?}:\n{err}");
+    }
+    for debug in [
+        "Stats {",
+        "PhaseTimes",
+        "PrepareStats",
+        "Rejections {",
+        "ms,",
+    ] {
+        assert!(!err.contains(debug), "-v prints a Debug dump:\n{err}");
+    }
+    let r = report(&rep);
+    for key in [
+        "read",
+        "simplify",
+        "simplify.contractions",
+        "measure",
+        "write",
+    ] {
+        assert!(
+            r["phases_ms"][key].as_f64().is_some(),
+            "phases_ms.{key}: {r}"
+        );
+    }
+    let m = &r["meshes"][0];
+    assert_eq!(m["stop_reason"], "reached the target");
+    assert!(m["refusals"]["flip"].as_u64().is_some(), "{m}");
+    assert_eq!(
+        m["prepare"]["input_triangles"].as_u64(),
+        m["welded_triangles"].as_u64()
+    );
+    assert!(m["contractions"].as_u64().unwrap() > 0);
+}
