@@ -422,6 +422,7 @@ pub fn build_file(
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }
+    on_progress(Progress::Reading);
     let t_read = Instant::now();
     let scene = io::read_scene(input).with_context(|| format!("reading {}", input.display()))?;
     let read = t_read.elapsed();
@@ -429,6 +430,7 @@ pub fn build_file(
     let builds = lod::build_lods(&scene, &opts, on_progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
     let build = t_build.elapsed();
+    on_progress(Progress::Writing);
     let t_write = Instant::now();
     let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
     let summary = gltf_out::write_lods(output, &scene, &lods, &args.write_options())
@@ -465,18 +467,34 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
     let t0 = Instant::now();
     let bar = show_progress.then(|| {
         let b = indicatif::ProgressBar::new_spinner();
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {elapsed:>3} {msg}") {
+            b.set_style(style);
+        }
         b.enable_steady_tick(std::time::Duration::from_millis(120));
         b
     });
+    // Phase start, for the measuring ETA (levels take similar times).
+    let mut phase_start = Instant::now();
     let mut on_progress = |p: Progress| {
-        if let Some(b) = &bar {
-            b.set_message(match p {
-                Progress::Simplifying { mesh, of } => format!("simplifying mesh {}/{of}", mesh + 1),
-                Progress::Measuring { mesh, level, of } => {
-                    format!("mesh {}: measuring level {}/{of}", mesh + 1, level + 1)
+        let Some(b) = &bar else { return };
+        let msg = match p {
+            Progress::Reading => format!("reading {}", input.display()),
+            Progress::Writing => format!("writing {}", output.display()),
+            Progress::Simplifying { mesh, of } => format!("simplifying mesh {}/{of}", mesh + 1),
+            Progress::Measuring { mesh, level, of } => {
+                if level == 0 {
+                    phase_start = Instant::now();
                 }
-            });
-        }
+                let eta = if level > 0 {
+                    let per = phase_start.elapsed().as_secs_f64() / level as f64;
+                    format!(", about {:.0} s left", per * (of - level) as f64)
+                } else {
+                    String::new()
+                };
+                format!("mesh {}: measuring level {}/{of}{eta}", mesh + 1, level + 1)
+            }
+        };
+        b.set_message(msg);
     };
     let built = build_file(input, &output, args, &mut on_progress)?;
     if let Some(b) = bar {

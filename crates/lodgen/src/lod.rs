@@ -163,9 +163,15 @@ pub struct BuildTimes {
     pub total: std::time::Duration,
 }
 
-/// Progress events, for a progress bar.
+/// Progress events, for a progress bar (the builder never prints). In
+/// order: `Reading`, then per mesh `Simplifying` and one `Measuring` per
+/// level, then `Writing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Progress {
+    /// Parsing the input file (sent by [`crate::cli::build_file`]).
+    Reading,
+    /// Writing the output file (sent by [`crate::cli::build_file`]).
+    Writing,
     Simplifying {
         mesh: usize,
         of: usize,
