@@ -153,6 +153,14 @@ pub struct BuildArgs {
     #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
     pub samples: f64,
 
+    /// Floor per mesh, in triangles: no level has fewer (nor fewer than 1),
+    /// so a mesh with at most this many (a quad, a card, a decal) is written
+    /// unsimplified. A mesh too small for its requested levels keeps its
+    /// coarsest allowed mesh for them; levels that coincide are written
+    /// once, so its chain is shorter, and the table says so in a note.
+    #[arg(long, value_name = "N", default_value_t = lod::DEFAULT_MIN_TRIANGLES)]
+    pub min_triangles: usize,
+
     /// No table, no progress bar; errors only.
     #[arg(short, long)]
     pub quiet: bool,
@@ -352,6 +360,7 @@ impl BuildArgs {
             adaptive,
             measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
             attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
+            min_triangles: self.min_triangles,
         })
     }
 
@@ -585,6 +594,9 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
         if st.stop != lodgen_pm::StopReason::Target {
             s += &format!("  note: {}\n", stop_note(st.stop, &st.stats));
         }
+        for n in &b.notes {
+            s += &format!("  note: {n}\n");
+        }
         s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
         for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
             let verts: usize = l.primitives.iter().map(|p| p.positions.len()).sum();
@@ -618,6 +630,7 @@ fn report_json(
             "input_triangles": scene.meshes[b.lod.source].primitives.iter().map(|p| p.triangle_count()).sum::<usize>(),
             "welded_triangles": b.simplified.stats.input_triangles,
             "stop": format!("{:?}", b.simplified.stop),
+            "notes": b.notes,
             "levels": b.lod.levels.iter().zip(&b.errors).zip(&b.level_splits).enumerate().map(|(k, ((l, e), s))| json!({
                 "triangles": l.triangle_count(),
                 "vertices": l.primitives.iter().map(|p| p.positions.len()).sum::<usize>(),

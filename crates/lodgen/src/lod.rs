@@ -32,8 +32,8 @@ use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
 use lodgen_pm::metric::{self, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::{
-    simplify_adaptive, simplify_with_wedges, AdaptiveOptions, Mesh, MeshError, Method, Simplified,
-    SimplifyOptions,
+    simplify_adaptive, simplify_with_wedges, AdaptiveOptions, Mesh, MeshError, Method,
+    ProgressiveMesh, Simplified, SimplifyOptions,
 };
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -62,7 +62,18 @@ pub struct BuildOptions {
     pub measure: MeasureOptions,
     /// Weights of the attribute term of the cost (`lodgen_pm::simplify::features`).
     pub attribute_weights: AttributeWeights,
+    /// Floor per mesh: no level has fewer triangles than this (nor fewer
+    /// than 1), so a mesh with at most this many is written unsimplified.
+    /// Default value: [`DEFAULT_MIN_TRIANGLES`].
+    pub min_triangles: usize,
 }
+
+/// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
+/// billboards (2–8 triangles) are kept as they are: any contraction of such a
+/// part moves its outline by the part's own size, and a level of 1–7
+/// triangles saves nothing a draw call would notice. A box (12) or more is
+/// simplified down to 8 at most.
+pub const DEFAULT_MIN_TRIANGLES: usize = 8;
 
 /// Weights of each attribute in the cost (Hoppe 1999 attribute quadrics,
 /// `lodgen_pm::simplify::features`): a difference of 1 in an attribute at weight 1
@@ -113,6 +124,7 @@ impl Default for BuildOptions {
             adaptive: AdaptiveOptions::DEFAULT,
             measure: MeasureOptions::DEFAULT,
             attribute_weights: AttributeWeights::DEFAULT,
+            min_triangles: DEFAULT_MIN_TRIANGLES,
         }
     }
 }
@@ -149,6 +161,10 @@ pub struct MeshBuild {
     /// Wall time of the simplification (preparation included) and of the
     /// error measurement (the original's hierarchy included).
     pub times: BuildTimes,
+    /// What the user should know about this chain, in words (levels raised
+    /// to the triangle floor, requested levels that coincide); printed under
+    /// the mesh's table and in the report.
+    pub notes: Vec<String>,
 }
 
 /// Where a mesh's build time went (wall clock).
@@ -526,14 +542,14 @@ pub fn build_one(
             // count is only a lower bound of what is needed, so run to the
             // smallest requested ratio / count of the input.
             let target = levels::triangle_target(full_tris, specs).unwrap_or(0);
-            sopts.target_triangles = Some(target);
+            sopts.target_triangles = Some(target.max(opts.min_triangles.max(1)));
             sopts.target_ratio = None;
         }
         LevelRequest::MaxErrors(bounds) => {
             if bounds.is_empty() {
                 return Err(BuildError::NoLevels);
             }
-            sopts.target_triangles = Some(0);
+            sopts.target_triangles = Some(opts.min_triangles.max(1));
             sopts.target_ratio = None;
         }
     }
@@ -574,6 +590,24 @@ pub fn build_one(
         measure_mesh(&pm.mesh_at_splits(k), mopts)
     };
 
+    // Requested levels whose triangle count is below the floor.
+    let floor = opts.min_triangles.max(1);
+    let below_floor = match &opts.levels {
+        LevelRequest::Specs(specs) => {
+            let welded = pm.triangle_counts().last().copied().unwrap_or(0);
+            specs
+                .iter()
+                .filter(|s| match **s {
+                    LevelSpec::Ratio(r) => {
+                        ((r.clamp(0.0, 1.0) * welded as f64).floor() as usize) < floor
+                    }
+                    LevelSpec::Triangles(t) => t < floor,
+                    LevelSpec::MaxError(_) => false,
+                })
+                .count()
+        }
+        LevelRequest::MaxErrors(_) => 0,
+    };
     // Split counts, finest first, without repeats.
     let mut splits: Vec<usize> = match &opts.levels {
         LevelRequest::Specs(specs) => {
@@ -616,8 +650,7 @@ pub fn build_one(
             out
         }
     };
-    splits.sort_unstable_by(|a, b| b.cmp(a));
-    splits.dedup();
+    let notes = apply_floor(pm, opts.min_triangles, &mut splits, below_floor);
 
     let mut errors = Vec::with_capacity(splits.len());
     let mut lod_levels = Vec::with_capacity(splits.len());
@@ -672,7 +705,50 @@ pub fn build_one(
             measure: measure_time.get(),
             total: t_build.elapsed(),
         },
+        notes,
     })
+}
+
+/// Raise every level to the triangle floor (`min_triangles`, at least 1, at
+/// most the whole mesh: a level is never empty), then order the split counts
+/// finest first without repeats. `below` counts the requested levels known
+/// to ask for fewer triangles than the floor. Returns the notes for the
+/// table.
+fn apply_floor(
+    pm: &ProgressiveMesh,
+    min_triangles: usize,
+    splits: &mut Vec<usize>,
+    below: usize,
+) -> Vec<String> {
+    let counts = pm.triangle_counts();
+    let full = counts.last().copied().unwrap_or(0);
+    let floor = min_triangles.max(1).min(full);
+    // counts never decrease with k: the first k with enough triangles
+    let k_floor = counts.partition_point(|&c| c < floor);
+    let requested = splits.len();
+    let mut raised = 0;
+    for k in splits.iter_mut() {
+        if *k < k_floor {
+            *k = k_floor;
+            raised += 1;
+        }
+    }
+    splits.sort_unstable_by(|a, b| b.cmp(a));
+    splits.dedup();
+    let mut notes = Vec::new();
+    let below = below.max(raised);
+    if below > 0 {
+        let kept = counts.get(k_floor).copied().unwrap_or(full);
+        notes.push(format!(
+            "{below} of {requested} requested levels ask for fewer than {} triangles \
+             (--min-triangles) and keep {kept}{}; levels that coincide are written once: \
+             {} of {requested} written",
+            min_triangles.max(1),
+            if kept == full { ", the whole mesh" } else { "" },
+            splits.len()
+        ));
+    }
+    notes
 }
 
 /// Which attributes are fitted per level (`lodgen_pm::attrfit`), and where

@@ -76,6 +76,7 @@ struct MeasureArgs {
 }
 
 fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Inspect { file }) => lodgen::inspect::inspect(&file)
@@ -115,4 +116,16 @@ fn run_build(args: BuildArgs) -> Result<()> {
     };
     let show_progress = !args.quiet && std::io::stderr().is_terminal();
     cli::build(&input, &args, show_progress)
+}
+
+/// `lodgen … | head` must end quietly when the reader goes away, as every
+/// Unix tool does, not panic in `println!` ("failed printing to stdout").
+/// Outputs are written before the table is printed, so nothing is cut short.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE, before any
+    // thread is started; no handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
