@@ -399,6 +399,8 @@ fn a_mesh_that_cannot_reach_its_levels_says_where_it_stopped_and_why() {
         input.to_str().unwrap(),
         "--levels",
         "50%,25%",
+        "--min-triangles",
+        "1",
         "-o",
         out.to_str().unwrap(),
     ]);
