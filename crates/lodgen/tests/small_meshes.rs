@@ -22,8 +22,11 @@ fn publish(file: &Path, name: &str) {
     }
 }
 
+/// A named object: positions and triangles.
+type Object<'a> = (&'a str, Vec<[f32; 3]>, Vec<[u32; 3]>);
+
 /// One OBJ object per (name, positions, triangles).
-fn write_obj(path: &Path, objects: &[(&str, Vec<[f32; 3]>, Vec<[u32; 3]>)]) {
+fn write_obj(path: &Path, objects: &[Object<'_>]) {
     let mut s = String::new();
     let mut base = 1;
     for (name, positions, triangles) in objects {
@@ -89,7 +92,7 @@ fn levels(r: &serde_json::Value, m: usize) -> Vec<u64> {
 fn one_triangle_a_quad_and_two_far_triangles_are_written_whole() {
     let dir = tempfile::tempdir().unwrap();
     let (qp, qt) = quad();
-    let cases: [(&str, Vec<[f32; 3]>, Vec<[u32; 3]>); 3] = [
+    let cases: [Object<'_>; 3] = [
         (
             "triangle",
             vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]],
