@@ -37,10 +37,9 @@ fn smf_errors_name_the_line() {
     assert_eq!(*bad("v 0 0 0\n").kind, ErrorKind::EmptyMesh);
 }
 
-fn temp(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodgen-io-smf-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+/// `bytes` in a file named `name` of `dir`.
+fn temp(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.path().join(name);
     std::fs::write(&path, bytes).unwrap();
     path
 }
@@ -67,12 +66,13 @@ fn dispatch_by_extension_case_insensitive_and_by_content() {
     );
     assert_eq!(detect_format(Path::new("a.stl"), b"solid x"), None);
 
-    let p = temp("upper.SMF", tri);
+    let dir = tempfile::tempdir().unwrap();
+    let p = temp(&dir, "upper.SMF", tri);
     let s = read_scene(&p).unwrap();
     assert_eq!(s.meshes[0].name, "upper");
     assert_eq!(s.meshes[0].primitives[0].triangle_count(), 1);
 
-    let p = temp("mesh.stl", b"solid x\nendsolid\n");
+    let p = temp(&dir, "mesh.stl", b"solid x\nendsolid\n");
     let e = read_scene(&p).unwrap_err();
     assert_eq!(*e.kind, ErrorKind::UnknownFormat);
     assert_eq!(

@@ -4,7 +4,7 @@
 //! output into `$LODGEN_TEST_OUT` for the glTF-Validator CI step.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use lodgen::coverage::assign_screen_coverages;
 use lodgen::gltf_out::WriteSummary;
@@ -84,12 +84,30 @@ pub fn chain(name: &str, source: usize, prim: Primitive, ratios: &[f64]) -> LodM
     lod
 }
 
-/// A fresh empty scratch directory for one test.
-pub fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodgen-gltf-out-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh empty scratch directory for one test, removed when dropped.
+pub struct Scratch(tempfile::TempDir);
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A fresh empty scratch directory for one test (removed at its end).
+pub fn scratch(test: &str) -> Scratch {
+    Scratch(
+        tempfile::Builder::new()
+            .prefix(&format!("lodgen-gltf-out-{test}-"))
+            .tempdir()
+            .unwrap(),
+    )
 }
 
 /// Copies every written file into `$LODGEN_TEST_OUT/<prefix>/` when set.
