@@ -333,6 +333,21 @@ fn batch(
     .map_err(error)
 }
 
+/// `read(path)`: every mesh a file's scene draws, merged (as `lodgen
+/// measure` reads it): positions and triangles.
+#[pyfunction]
+fn read(py: Python<'_>, path: PathBuf) -> PyResult<Arrays<'_>> {
+    let m = py
+        .detach(|| -> anyhow::Result<Mesh> {
+            let scene = crate::io::read_scene(&path).map_err(|e| {
+                anyhow::Error::from(e).context(format!("reading {}", path.display()))
+            })?;
+            Ok(cli::merged_mesh(&scene))
+        })
+        .map_err(error)?;
+    arrays(py, &m.positions, &m.triangles)
+}
+
 /// `expand(inputs, out_dir)`: batch mode's inputs (files, directories,
 /// globs) with each output's path relative to `out_dir`, in batch order.
 #[pyfunction]
@@ -526,5 +541,6 @@ fn _lodgen(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(build, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add_function(wrap_pyfunction!(expand, m)?)?;
+    m.add_function(wrap_pyfunction!(read, m)?)?;
     Ok(())
 }

@@ -40,6 +40,7 @@ __all__ = [
     "build",
     "expand_inputs",
     "measure",
+    "read",
     "simplify",
 ]
 
@@ -373,6 +374,14 @@ def build(
         threads,
     )
     return json.loads(text)
+
+
+def read(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
+    """Read a mesh file (.obj, .ply, .smf, .gltf, .glb) with lodgen's readers:
+    every mesh its scene draws merged into (vertices float32 (n, 3), faces
+    int64 (m, 3)), node transforms not applied (as ``lodgen measure``)."""
+    v, f = _lodgen.read(os.fspath(path))
+    return v, f.astype(np.int64)
 
 
 def expand_inputs(

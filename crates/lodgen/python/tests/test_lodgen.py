@@ -215,3 +215,15 @@ def test_the_gil_is_released_during_a_long_simplify():
     # (or a handful of) increments in between.
     assert during["seconds"] > 0.05
     assert during["ticks"] > 10000, during
+
+
+def test_read_gives_the_arrays_the_command_reads(tmp_path):
+    v, f = torus(n=12, m=6)
+    write_obj(tmp_path / "t.obj", v, f)
+    rv, rf = lodgen.read(tmp_path / "t.obj")
+    # The OBJ reader numbers vertices in order of first use.
+    assert rv.dtype == np.float32 and rf.dtype == np.int64
+    assert rv.shape == v.shape and rf.shape == f.shape
+    assert triangle_set(rv, rf) == triangle_set(v, f)
+    with pytest.raises(lodgen.LodgenError, match=r"reading .*missing\.obj"):
+        lodgen.read(tmp_path / "missing.obj")
