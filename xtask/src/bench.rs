@@ -132,6 +132,11 @@ fn meshopt_once(m: &Mesh, indices: &[u32]) -> Result<(f64, Vec<f64>, Vec<Mesh>)>
 }
 
 pub fn child(args: &[String]) -> Result<()> {
+    if let Some((tool, rest)) = args.split_first() {
+        if matches!(tool.as_str(), "meshopt-e2e" | "meshopt-errors" | "e2e-run") {
+            return crate::e2e::child(tool, rest);
+        }
+    }
     let [tool, id, runs] = args else {
         bail!("usage: xtask bench-child lodgen|meshopt|pairs MESH RUNS");
     };
@@ -270,6 +275,21 @@ pub fn run(args: &[String]) -> Result<()> {
             p["ratio_q3"].as_f64().unwrap_or(f64::NAN),
             p["pairs"],
         );
+        // the simplification alone at 1 and 2 threads, run by run
+        for threads in ["1", "2"] {
+            let out = Command::new(&exe)
+                .args(["bench-child", "pairs", id, &(2 * runs + 1).to_string()])
+                .env("RAYON_NUM_THREADS", threads)
+                .output()?;
+            let p: Value = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
+            println!(
+                "{id}: {threads} thread(s): time lodgen / meshopt 2 % call, run by run: {:.2} (quartiles {:.2}–{:.2})",
+                p["ratio_median"].as_f64().unwrap_or(f64::NAN),
+                p["ratio_q1"].as_f64().unwrap_or(f64::NAN),
+                p["ratio_q3"].as_f64().unwrap_or(f64::NAN),
+            );
+        }
     }
+    crate::e2e::run(&exe, quick)?;
     Ok(())
 }

@@ -6,6 +6,7 @@ mod attributes;
 mod bench;
 mod compare;
 mod draco;
+mod e2e;
 mod golden;
 mod render;
 mod test;
@@ -16,7 +17,8 @@ tasks:
   test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
   draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
-  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny
+  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
+                          then end to end (the lodgen binary vs a meshopt program; + 4.4M)
   compare [--meshes bunny,cow,fandisk] [--no-render]
                           every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
 
