@@ -153,6 +153,13 @@ pub struct BuildArgs {
     #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
     pub samples: f64,
 
+    /// Measure each level's error against the input (`on`), or skip it for
+    /// speed (`off`): errors and screen coverages then come from the
+    /// simplifier's own estimate (the quadric error of the contractions
+    /// still in a level), marked `≈` in the table; RMS is not known.
+    #[arg(long, value_enum, value_name = "on|off", default_value = "on")]
+    pub measure: MeasureMode,
+
     /// Floor per mesh, in triangles: no level has fewer (nor fewer than 1),
     /// so a mesh with at most this many (a quad, a card, a decal) is written
     /// unsimplified. A mesh too small for its requested levels keeps its
@@ -169,6 +176,13 @@ pub struct BuildArgs {
     /// reason, time per phase.
     #[arg(short, long)]
     pub verbose: bool,
+}
+
+/// `--measure`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeasureMode {
+    On,
+    Off,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -359,6 +373,7 @@ impl BuildArgs {
             method,
             adaptive,
             measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
+            measured: self.measure == MeasureMode::On,
             attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
             min_triangles: self.min_triangles,
         })
@@ -600,12 +615,19 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
         s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
         for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
             let verts: usize = l.primitives.iter().map(|p| p.positions.len()).sum();
+            // --measure off: the quadric's estimate, marked ≈; RMS unknown
+            let (h, rms) = if b.measured {
+                (
+                    format!("{:.4}", e.hausdorff_percent()),
+                    format!("{:.4}", e.rms_percent()),
+                )
+            } else {
+                (format!("≈{:.4}", e.hausdorff_percent()), "—".to_string())
+            };
             s += &format!(
-                "  {k:>5}  {:>9}  {:>8}  {:>11.4}  {:>8.4}  {:>10.3e}  {:>8}\n",
+                "  {k:>5}  {:>9}  {:>8}  {h:>11}  {rms:>8}  {:>10.3e}  {:>8}\n",
                 l.triangle_count(),
                 verts,
-                e.hausdorff_percent(),
-                e.rms_percent(),
                 l.screen_coverage,
                 bytes.get(i).and_then(|b| b.get(k)).copied().unwrap_or(0),
             );
@@ -629,6 +651,7 @@ fn report_json(
             "source_mesh": b.lod.source,
             "input_triangles": scene.meshes[b.lod.source].primitives.iter().map(|p| p.triangle_count()).sum::<usize>(),
             "welded_triangles": b.simplified.stats.input_triangles,
+            "measured": b.measured,
             "stop": format!("{:?}", b.simplified.stop),
             "notes": b.notes,
             "levels": b.lod.levels.iter().zip(&b.errors).zip(&b.level_splits).enumerate().map(|(k, ((l, e), s))| json!({

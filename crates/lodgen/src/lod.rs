@@ -30,7 +30,9 @@
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use lodgen_pm::attrfit::Channel;
 use lodgen_pm::levels::{self, LevelSpec};
-use lodgen_pm::metric::{self, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
+use lodgen_pm::metric::{
+    self, Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference,
+};
 use lodgen_pm::{
     simplify_adaptive, simplify_with_wedges, AdaptiveOptions, Mesh, MeshError, Method,
     ProgressiveMesh, Simplified, SimplifyOptions,
@@ -60,6 +62,10 @@ pub struct BuildOptions {
     /// Options of the curvature-adaptive methods.
     pub adaptive: AdaptiveOptions,
     pub measure: MeasureOptions,
+    /// Measure each level's error (default). When false, a level's error is
+    /// the quadric's estimate (the largest recorded contraction error still
+    /// in it; RMS unknown) and `MeshBuild::measured` says so.
+    pub measured: bool,
     /// Weights of the attribute term of the cost (`lodgen_pm::simplify::features`).
     pub attribute_weights: AttributeWeights,
     /// Floor per mesh: no level has fewer triangles than this (nor fewer
@@ -123,6 +129,7 @@ impl Default for BuildOptions {
             method: Method::Qem,
             adaptive: AdaptiveOptions::DEFAULT,
             measure: MeasureOptions::DEFAULT,
+            measured: true,
             attribute_weights: AttributeWeights::DEFAULT,
             min_triangles: DEFAULT_MIN_TRIANGLES,
         }
@@ -158,6 +165,9 @@ pub struct MeshBuild {
     pub level_splits: Vec<usize>,
     /// Measured error of each level against the welded input, finest first.
     pub errors: Vec<ErrorReport>,
+    /// False when `errors` are the quadric's estimates (`--measure off`):
+    /// their maxima are the recorded contraction errors, mean and RMS NaN.
+    pub measured: bool,
     /// Wall time of the simplification (preparation included) and of the
     /// error measurement (the original's hierarchy included).
     pub times: BuildTimes,
@@ -574,11 +584,40 @@ pub fn build_one(
     let full = pm.mesh_at_splits(pm.len());
     let diagonal = full.diagonal();
     // The original's hierarchy and sample order, built once for every level.
+    // Without measurement (`measured == false`), a level's error is the
+    // largest recorded contraction error still in it (the quadric's
+    // estimate): the mesh after k splits still carries contractions k..
+    let estimate = |k: usize| {
+        let e = pm.splits[k.min(pm.splits.len())..]
+            .iter()
+            .map(|s| f64::from(s.error))
+            .fold(0.0, f64::max);
+        let d = Distance {
+            max: e,
+            mean: f64::NAN,
+            rms: f64::NAN,
+            samples: 0,
+        };
+        ErrorReport {
+            a_to_b: d,
+            b_to_a: d,
+            diagonal,
+        }
+    };
     let t_measure = Instant::now();
-    let reference = Reference::new(MeshRef::new(&full.positions, &full.triangles))
-        .map_err(|e| measure_err(MeasureError::A(e)))?;
+    let reference = if opts.measured {
+        Some(
+            Reference::new(MeshRef::new(&full.positions, &full.triangles))
+                .map_err(|e| measure_err(MeasureError::A(e)))?,
+        )
+    } else {
+        None
+    };
     let measure_time = std::cell::Cell::new(t_measure.elapsed());
-    let measure_mesh = |m: &lodgen_pm::Mesh, mopts: &MeasureOptions| {
+    let measure_mesh = |m: &lodgen_pm::Mesh, k: usize, mopts: &MeasureOptions| {
+        let Some(reference) = &reference else {
+            return Ok(estimate(k));
+        };
         let t = Instant::now();
         let r = reference
             .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
@@ -587,7 +626,7 @@ pub fn build_one(
         r
     };
     let measure_at = |k: usize, mopts: &MeasureOptions| -> Result<ErrorReport, BuildError> {
-        measure_mesh(&pm.mesh_at_splits(k), mopts)
+        measure_mesh(&pm.mesh_at_splits(k), k, mopts)
     };
 
     // Requested levels whose triangle count is below the floor.
@@ -636,6 +675,10 @@ pub fn build_one(
                     of: bounds.len(),
                 });
                 let bound = b * diagonal;
+                if !opts.measured {
+                    out.push(levels::splits_for(pm, LevelSpec::MaxError(bound)));
+                    continue;
+                }
                 let (mut lo, mut hi) = (0usize, pm.len());
                 while lo < hi {
                     let mid = lo + (hi - lo) / 2;
@@ -664,7 +707,7 @@ pub fn build_one(
         });
         cursor.seek(k);
         let m = cursor.mesh();
-        let report = measure_mesh(m, &opts.measure)?;
+        let report = measure_mesh(m, k, &opts.measure)?;
         // a level below the input gets fitted values (module docs)
         let fitted = match (&fit_source, cursor.wedges()) {
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
@@ -700,6 +743,7 @@ pub fn build_one(
         simplified,
         level_splits: splits,
         errors,
+        measured: opts.measured,
         times: BuildTimes {
             simplify: simplify_time,
             measure: measure_time.get(),

@@ -504,3 +504,38 @@ fn verbose_prints_tables_and_the_report_carries_them() {
     );
     assert!(m["contractions"].as_u64().unwrap() > 0);
 }
+
+/// `--measure off`: errors and coverages from the quadric estimate, marked
+/// `≈` in the table, `measured: false` and no RMS in the report; the chain
+/// still has rising errors and falling coverages, and the same levels.
+#[test]
+fn measure_off_estimates_errors_and_keeps_the_chain_valid() {
+    let d = tmp("measure-off");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let rep = d.join("r.json");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "--measure",
+        "off",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains('≈'), "{}", stdout(&o));
+    let r = report(&rep);
+    assert_eq!(r["meshes"][0]["measured"], false);
+    let levels = r["meshes"][0]["levels"].as_array().unwrap();
+    let h: Vec<f64> = levels
+        .iter()
+        .map(|l| l["hausdorff_percent"].as_f64().unwrap())
+        .collect();
+    let c: Vec<f64> = levels
+        .iter()
+        .map(|l| l["screen_coverage"].as_f64().unwrap())
+        .collect();
+    assert!(h[0] <= h[1] && h[1] <= h[2] && h[2] > 0.0, "{h:?}");
+    assert!(c[0] > c[1] && c[1] > c[2], "{c:?}");
+    assert!(levels.iter().all(|l| l["rms_percent"].is_null()));
+    assert_eq!(level_triangles(&r), vec![1152, 230, 46]);
+}
