@@ -368,3 +368,46 @@ fn an_output_directory_inside_the_input_is_not_read_back() {
         );
     }
 }
+
+#[test]
+fn a_changed_companion_file_rebuilds_its_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    std::fs::create_dir_all(root.join("src")).unwrap();
+    // An OBJ with a material library, and a .gltf with external buffers.
+    let torus = lodgen_pm::shapes::torus(1.0, 0.35, 24, 12);
+    std::fs::write(
+        root.join("src/a.obj"),
+        format!("mtllib a.mtl\nusemtl red\n{}", obj_text(&torus)),
+    )
+    .unwrap();
+    std::fs::write(root.join("src/a.mtl"), "newmtl red\nKd 1 0 0\n").unwrap();
+    std::fs::write(root.join("t.obj"), obj_text(&torus)).unwrap();
+    let o = lodgen(&["t.obj", "-o", "src/b.gltf", "-q"], root);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bins: Vec<PathBuf> = walk(&root.join("src"))
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "bin"))
+        .collect();
+    assert!(!bins.is_empty());
+
+    let run = |name: &str| {
+        let o = lodgen(&["src", "--out-dir", "out", "--report", name], root);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r = read_report(&root.join(name));
+        (r["built"].as_u64().unwrap(), r["skipped"].as_u64().unwrap())
+    };
+    assert_eq!(run("r1.json"), (2, 0));
+    assert_eq!(run("r2.json"), (0, 2));
+    std::fs::write(root.join("src/a.mtl"), "newmtl red\nKd 0 0 1\n").unwrap();
+    assert_eq!(run("r3.json"), (1, 1), "a changed .mtl rebuilds its .obj");
+    // The same bytes again in a buffer: unchanged; other bytes: rebuilt.
+    let bin = &bins[0];
+    let bytes = std::fs::read(bin).unwrap();
+    std::fs::write(bin, &bytes).unwrap();
+    assert_eq!(run("r4.json"), (0, 2));
+    let mut changed = bytes.clone();
+    changed[0] ^= 1;
+    std::fs::write(bin, &changed).unwrap();
+    assert_eq!(run("r5.json"), (1, 1), "a changed .bin rebuilds its .gltf");
+}
