@@ -7,6 +7,7 @@ mod bench;
 mod compare;
 mod draco;
 mod e2e;
+mod fuzz;
 mod golden;
 mod render;
 mod test;
@@ -16,6 +17,9 @@ const USAGE: &str = "usage: cargo xtask <task> [args]
 tasks:
   test [CARGO-TEST-ARGS]  run every test: cargo test, glTF-Validator, Babylon.js MSFT_lod check
   draco [DIR]             Draco round trip of every LOD level in DIR (default target/test-out)
+  fuzz [--cases N] [--seed S]
+                          mutated OBJ/PLY/SMF/GLB files through read, build, write, inspect (default 2000 cases, seed 1);
+                          a failing case is stored in tests/fuzz-regressions/
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
                           then end to end (the lodgen binary vs a meshopt program; + 4.4M)
@@ -35,6 +39,7 @@ fn main() -> anyhow::Result<()> {
         "test" => test::run(rest),
         "draco" => draco::run(rest),
         "golden" => golden::run(rest),
+        "fuzz" => fuzz::run(rest),
         "bench" => bench::run(rest),
         "attributes" => attributes::run(rest),
         "bench-child" => bench::child(rest),

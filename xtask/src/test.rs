@@ -2,9 +2,11 @@
 //!
 //! 1. `cargo test --workspace` with `LODGEN_TEST_OUT=<root>/target/test-out`
 //!    (emptied first); Rust tests write every glTF they produce there.
-//! 2. Khronos glTF-Validator on everything in that directory
+//! 2. `cargo xtask fuzz --cases 3000 --seed 1` in-process (mutated input
+//!    files through read, build, write, inspect; see `fuzz.rs`).
+//! 3. Khronos glTF-Validator on everything in that directory
 //!    (`node tests/js/validate.mjs [--require] target/test-out`).
-//! 3. Babylon.js in headless Chromium for every `NAME.report.json` there that
+//! 4. Babylon.js in headless Chromium for every `NAME.report.json` there that
 //!    has a sibling `NAME.glb` (`node tests/js/babylon-lod.mjs`).
 //!
 //! Outputs are required (no glTF file, or no report/.glb pair, is a failure)
@@ -200,7 +202,25 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
             .current_dir(&root),
     );
 
-    // 2 and 3. JS checks on what the Rust tests wrote.
+    // 2. A fixed-seed fuzz budget (about half a minute; `cargo xtask fuzz
+    // --cases N --seed S` for a long run).
+    let t_fuzz = Instant::now();
+    match crate::fuzz::run(&["--cases".into(), "3000".into(), "--seed".into(), "1".into()]) {
+        Ok(()) => steps.record(
+            "fuzz (3000 cases, seed 1)",
+            Outcome::Passed,
+            t_fuzz.elapsed().as_secs_f64(),
+            "",
+        ),
+        Err(e) => steps.record(
+            "fuzz (3000 cases, seed 1)",
+            Outcome::Failed,
+            t_fuzz.elapsed().as_secs_f64(),
+            &format!("{e:#}"),
+        ),
+    }
+
+    // 3 and 4. JS checks on what the Rust tests wrote.
     let (require, why) = outputs_required(&root)?;
     println!(
         "xtask test: test outputs in {} are {} ({why})",

@@ -5,6 +5,7 @@ pub mod assets;
 pub mod batch;
 pub mod cli;
 pub mod coverage;
+pub mod fuzz;
 pub mod gltf_out;
 pub mod inspect;
 pub mod io;
