@@ -703,39 +703,3 @@ fn bunny_bvh_matches_brute_force_and_translation_bounds_distance() {
     // Defaults: 2 per triangle each way plus the 34,834 referenced vertices.
     assert_eq!(r.a_to_b.samples, 2 * 69_451 + 34_834);
 }
-
-/// A mesh large enough for the parallel build (> 32,768 triangles): the same tree on one
-/// thread and on several (same answers, same triangle for every query), and exact answers.
-#[test]
-fn parallel_bvh_build_is_the_sequential_one_and_exact() {
-    let m = bumpy(140); // 39,200 triangles
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| TriangleBvh::new(m.r()).unwrap());
-    let many = rayon::ThreadPoolBuilder::new()
-        .num_threads(4)
-        .build()
-        .unwrap()
-        .install(|| TriangleBvh::new(m.r()).unwrap());
-    assert_eq!(one.depth(), many.depth());
-    for i in 0..200 {
-        let t = f64::from(i) / 200.0;
-        let p = [t, (7.0 * t).fract(), 0.3 * (13.0 * t).sin()];
-        let (d1, t1, _) = one.closest_point(p).unwrap();
-        let (d2, t2, _) = many.closest_point(p).unwrap();
-        assert_eq!((d1, t1), (d2, t2));
-        if i % 20 == 0 {
-            let brute = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|v| m.positions[v as usize].map(f64::from));
-                    distance_squared(p, closest_point_on_triangle(p, a, b, c))
-                })
-                .fold(f64::INFINITY, f64::min);
-            assert_eq!(d1, brute);
-        }
-    }
-}

@@ -246,11 +246,50 @@ impl TriangleBvh {
                 }
             })
             .collect();
-        let (nodes, max_depth) = if n == 0 {
-            (Vec::new(), 0)
-        } else {
-            build_subtree(&mut items, 0, 0)
+        let blank = BuildNode {
+            min: [0.0; 3],
+            max: [0.0; 3],
+            first: 0,
+            count: 0,
         };
+        let mut max_depth = 0;
+        let mut nodes: Vec<BuildNode> = Vec::with_capacity(if n == 0 { 0 } else { 2 * n - 1 });
+        if n > 0 {
+            nodes.push(blank);
+            // Work list of (node index, first slot, slot count); explicit, so a badly
+            // unbalanced input cannot overflow the call stack.
+            let mut work: Vec<(usize, usize, usize, usize)> = vec![(0, 0, n, 0)];
+            while let Some((ni, first, count, depth)) = work.pop() {
+                max_depth = max_depth.max(depth + 1);
+                let slots = &mut items[first..first + count];
+                let mut bb = Aabb::EMPTY;
+                let mut cb = Aabb::EMPTY;
+                for it in slots.iter() {
+                    bb.grow(&it.b);
+                    cb.grow_point(it.c);
+                }
+                nodes[ni].min = bb.min;
+                nodes[ni].max = bb.max;
+                if count <= MAX_LEAF {
+                    nodes[ni].first = first as u32;
+                    nodes[ni].count = count as u32;
+                    continue;
+                }
+                let mid = if depth < MAX_SAH_DEPTH {
+                    split(slots, &cb)
+                } else {
+                    median_split(slots, &cb)
+                };
+                debug_assert!(0 < mid && mid < count);
+                let left = nodes.len();
+                nodes[ni].first = left as u32;
+                nodes[ni].count = 0;
+                nodes.push(blank);
+                nodes.push(blank);
+                work.push((left + 1, first + mid, count - mid, depth + 1));
+                work.push((left, first, mid, depth + 1));
+            }
+        }
         let tris = items
             .iter()
             .map(|it| mesh.triangles[it.id as usize].map(|v| mesh.positions[v as usize]))
@@ -479,108 +518,6 @@ fn collapse(build: &[BuildNode]) -> Vec<Node> {
         nodes[ni] = node;
     }
     nodes
-}
-
-/// A blank build node, filled when its slots are partitioned.
-const BLANK: BuildNode = BuildNode {
-    min: [0.0; 3],
-    max: [0.0; 3],
-    first: 0,
-    count: 0,
-};
-
-/// Slot counts above which the two halves of a split are built in parallel.
-const PARALLEL_BUILD: usize = 1 << 15;
-
-/// Builds the binary tree over `items` (the slots `offset..offset + items.len()`) at `depth`:
-/// its nodes with the root at 0 and the two children of an internal node adjacent, and the
-/// tree's depth. Large ranges are split once here and their halves built in parallel
-/// (`rayon::join`); the splits are the sequential build's, so the tree has the same shape for
-/// any number of threads, and the numbering depends only on it.
-fn build_subtree(items: &mut [Item], offset: usize, depth: usize) -> (Vec<BuildNode>, usize) {
-    let count = items.len();
-    if count <= PARALLEL_BUILD || depth >= MAX_SAH_DEPTH {
-        return build_sequential(items, offset, depth);
-    }
-    let mut bb = Aabb::EMPTY;
-    let mut cb = Aabb::EMPTY;
-    for it in items.iter() {
-        bb.grow(&it.b);
-        cb.grow_point(it.c);
-    }
-    let mid = split(items, &cb);
-    debug_assert!(0 < mid && mid < count);
-    let (left, right) = items.split_at_mut(mid);
-    let ((l, ld), (r, rd)) = rayon::join(
-        || build_subtree(left, offset, depth + 1),
-        || build_subtree(right, offset + mid, depth + 1),
-    );
-    // [root, left root, right root, left's other nodes, right's other nodes]
-    let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
-    nodes.push(BuildNode {
-        min: bb.min,
-        max: bb.max,
-        first: 1,
-        count: 0,
-    });
-    // where node i (≥ 1) of each subtree goes
-    let l_base = 3 - 1;
-    let r_base = 3 + (l.len() - 1) - 1;
-    let moved = |n: &BuildNode, base: usize| BuildNode {
-        first: if n.count == 0 {
-            (base + n.first as usize) as u32
-        } else {
-            n.first
-        },
-        ..*n
-    };
-    nodes.push(moved(&l[0], l_base));
-    nodes.push(moved(&r[0], r_base));
-    nodes.extend(l[1..].iter().map(|n| moved(n, l_base)));
-    nodes.extend(r[1..].iter().map(|n| moved(n, r_base)));
-    (nodes, ld.max(rd) + 1)
-}
-
-/// [`build_subtree`] on one thread, with an explicit work list (so a badly unbalanced input
-/// cannot overflow the call stack).
-fn build_sequential(items: &mut [Item], offset: usize, depth0: usize) -> (Vec<BuildNode>, usize) {
-    let n = items.len();
-    let mut max_depth = 0;
-    let mut nodes: Vec<BuildNode> = Vec::with_capacity(2 * n - 1);
-    nodes.push(BLANK);
-    // (node index, first slot in `items`, slot count, depth)
-    let mut work: Vec<(usize, usize, usize, usize)> = vec![(0, 0, n, depth0)];
-    while let Some((ni, first, count, depth)) = work.pop() {
-        max_depth = max_depth.max(depth + 1 - depth0);
-        let slots = &mut items[first..first + count];
-        let mut bb = Aabb::EMPTY;
-        let mut cb = Aabb::EMPTY;
-        for it in slots.iter() {
-            bb.grow(&it.b);
-            cb.grow_point(it.c);
-        }
-        nodes[ni].min = bb.min;
-        nodes[ni].max = bb.max;
-        if count <= MAX_LEAF {
-            nodes[ni].first = (offset + first) as u32;
-            nodes[ni].count = count as u32;
-            continue;
-        }
-        let mid = if depth < MAX_SAH_DEPTH {
-            split(slots, &cb)
-        } else {
-            median_split(slots, &cb)
-        };
-        debug_assert!(0 < mid && mid < count);
-        let left = nodes.len();
-        nodes[ni].first = left as u32;
-        nodes[ni].count = 0;
-        nodes.push(BLANK);
-        nodes.push(BLANK);
-        work.push((left + 1, first + mid, count - mid, depth + 1));
-        work.push((left, first, mid, depth + 1));
-    }
-    (nodes, max_depth)
 }
 
 /// A triangle during the build.
