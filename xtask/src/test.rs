@@ -9,6 +9,12 @@
 //! 4. Babylon.js in headless Chromium for every `NAME.report.json` there that
 //!    has a sibling `NAME.glb` (`node tests/js/babylon-lod.mjs`).
 //!
+//! 4. The Python package's tests: `pip install ./crates/lodgen` (so the module
+//!    tested is the current source) into the venv `bash .ci/run` makes
+//!    (`target/ci-venv`, or the Python of `LODGEN_PYTHON`, which must have
+//!    pytest, numpy, trimesh and dask[distributed]), a release `lodgen` for
+//!    the comparisons, then pytest on `crates/lodgen/python/tests`.
+//!
 //! Outputs are required (no glTF file, or no report/.glb pair, is a failure)
 //! when `LODGEN_REQUIRE_GLTF=1`, or, when that variable is unset, as soon as
 //! any Rust source under `crates/` mentions `LODGEN_TEST_OUT`, i.e. once tests
@@ -178,6 +184,60 @@ fn outputs_required(root: &Path) -> Result<(bool, String)> {
     ))
 }
 
+/// Step 4: install the Python package from the checkout into the test venv
+/// and run pytest against a release `lodgen`.
+fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
+    let python = std::env::var_os("LODGEN_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target/ci-venv/bin/python"));
+    let ready = Command::new(&python)
+        .args(["-c", "import pytest, numpy, trimesh, distributed"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !ready {
+        let why = format!(
+            "{} with pytest, numpy, trimesh and dask[distributed] not found (bash .ci/run makes \
+             target/ci-venv; or set LODGEN_PYTHON)",
+            python.display()
+        );
+        steps.missing("Python package tests", ci, &why);
+        return;
+    }
+    let mut pip = Command::new(&python);
+    pip.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+    ])
+    .arg(root.join("crates/lodgen"))
+    .stdin(Stdio::null())
+    .current_dir(root);
+    if steps.run("pip install ./crates/lodgen", &mut pip) != Outcome::Passed {
+        return;
+    }
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));
+    let mut build = Command::new(cargo);
+    build
+        .args(["build", "--release", "-p", "lodgen"])
+        .current_dir(root);
+    if steps.run("cargo build --release -p lodgen", &mut build) != Outcome::Passed {
+        return;
+    }
+    let mut pytest = Command::new(&python);
+    pytest
+        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+        .arg(root.join("crates/lodgen/python/tests"))
+        .env("LODGEN_BIN", root.join("target/release/lodgen"))
+        .stdin(Stdio::null())
+        .current_dir(root.join("target"));
+    steps.run("pytest crates/lodgen/python/tests", &mut pytest);
+}
+
 pub fn run(cargo_test_args: &[String]) -> Result<()> {
     let root = workspace_root();
     let out = root.join("target").join("test-out");
@@ -302,6 +362,9 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
             }
         }
     }
+
+    // 4. The Python package.
+    python_tests(&root, ci, &mut steps);
 
     println!(
         "\nxtask test summary ({:.1} s):",
