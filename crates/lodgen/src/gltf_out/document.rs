@@ -1,0 +1,204 @@
+//! Document assembly: the root JSON of the output, either a new document
+//! for flat input (materials, one root node per chain) or the input glTF
+//! document kept (nodes, hierarchy, materials, skins, animations, images)
+//! with each mesh's node given its LOD chain.
+
+use std::path::Path;
+
+use serde_json::{json, Map, Value};
+
+use crate::scene::{LodMesh, Scene};
+
+use super::builder::Builder;
+use super::error::WriteError;
+use super::input::{embed_images, input_err, keep_animations, keep_skins, take_array};
+use super::msft_lod::{add_lod_nodes, dequant_transform};
+use super::prepare::PreparedChain;
+
+pub(super) fn flat_document(
+    scene: &Scene,
+    chains: &[PreparedChain],
+    chain_meshes: &[Vec<usize>],
+    out: &mut Builder,
+) -> Map<String, Value> {
+    let materials: Vec<Value> = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let mut pbr = json!({"metallicFactor": 0.0});
+            if let Some(c) = m.base_color {
+                pbr["baseColorFactor"] = json!(c);
+            }
+            json!({"name": m.name, "pbrMetallicRoughness": pbr})
+        })
+        .collect();
+    let mut nodes = Vec::new();
+    let mut roots = Vec::new();
+    for (chain, meshes) in chains.iter().zip(chain_meshes) {
+        let transform = dequant_transform(chain, out.opts.quantize);
+        let mut node = transform.clone();
+        node.insert("name".into(), chain.name.clone().into());
+        nodes.push(Value::Object(node));
+        let first = nodes.len() - 1;
+        roots.push(first);
+        add_lod_nodes(
+            &mut nodes,
+            first,
+            &chain.name,
+            meshes,
+            &chain.coverages,
+            &transform,
+        );
+    }
+    let mut root = Map::new();
+    root.insert(
+        "asset".into(),
+        json!({"version": "2.0", "generator": "lodgen"}),
+    );
+    if !materials.is_empty() {
+        root.insert("materials".into(), materials.into());
+    }
+    root.insert("nodes".into(), nodes.into());
+    root.insert("scene".into(), 0.into());
+    root.insert("scenes".into(), json!([{ "nodes": roots }]));
+    root
+}
+
+/// Mesh-data extensions of the input that no longer apply to the output.
+const DROPPED_EXTENSIONS: &[&str] = &[
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_mesh_quantization",
+    "MSFT_lod",
+    "EXT_mesh_gpu_instancing",
+];
+
+/// The input document with its meshes replaced by the LOD chains, its
+/// skins, animations and images carried into the output's non-LOD range.
+pub(super) fn gltf_document(
+    input_path: &Path,
+    document: &gltf_json::Root,
+    buffers: &[Vec<u8>],
+    lods: &[LodMesh],
+    chains: &[PreparedChain],
+    chain_meshes: &[Vec<usize>],
+    out: &mut Builder,
+) -> Result<Map<String, Value>, WriteError> {
+    let mut root = match serde_json::to_value(document)? {
+        Value::Object(m) => m,
+        _ => return Err(input_err("/".into(), "not a JSON object".into())),
+    };
+    let in_accessors = take_array(&mut root, "accessors");
+    let in_buffer_views = take_array(&mut root, "bufferViews");
+    for key in ["buffers", "meshes"] {
+        root.remove(key);
+    }
+    keep_skins(&mut root, &in_accessors, &in_buffer_views, buffers, out)?;
+    keep_animations(&mut root, &in_accessors, &in_buffer_views, buffers, out);
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        if let Some(Value::Array(list)) = root.get_mut(key) {
+            list.retain(|v| v.as_str().is_some_and(|s| !DROPPED_EXTENSIONS.contains(&s)));
+        }
+    }
+    if let Some(asset) = root.get_mut("asset").and_then(Value::as_object_mut) {
+        asset.insert("generator".into(), "lodgen".into());
+    }
+    embed_images(&mut root, input_path, document, buffers, out)?;
+    let quantize = out.opts.quantize;
+    attach_chains(&mut root, document, lods, chains, chain_meshes, quantize)?;
+    Ok(root)
+}
+
+/// Nodes: each node with a mesh gets that mesh's chain (with `quantize`, on
+/// a new child node that carries the dequantization).
+fn attach_chains(
+    root: &mut Map<String, Value>,
+    document: &gltf_json::Root,
+    lods: &[LodMesh],
+    chains: &[PreparedChain],
+    chain_meshes: &[Vec<usize>],
+    quantize: bool,
+) -> Result<(), WriteError> {
+    let mut chain_of = vec![usize::MAX; document.meshes.len()];
+    for (c, lod) in lods.iter().enumerate() {
+        if let Some(slot) = chain_of.get_mut(lod.source) {
+            *slot = c;
+        }
+    }
+    let mut nodes = match root.remove("nodes") {
+        Some(Value::Array(n)) => n,
+        _ => Vec::new(),
+    };
+    for node in &mut nodes {
+        // Node extensions that point at mesh data (instancing accessors) or
+        // at the input's own LOD chains no longer apply.
+        if let Some(Value::Object(ext)) = node.get_mut("extensions") {
+            ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
+            if ext.is_empty() {
+                if let Some(obj) = node.as_object_mut() {
+                    obj.remove("extensions");
+                }
+            }
+        }
+    }
+    let original_count = nodes.len();
+    for i in 0..original_count {
+        let Some(mesh) = nodes[i].get("mesh").and_then(Value::as_u64) else {
+            continue;
+        };
+        let at = format!("/nodes/{i}");
+        let c = *chain_of
+            .get(mesh as usize)
+            .filter(|&&c| c != usize::MAX)
+            .ok_or_else(|| input_err(at.clone(), format!("mesh {mesh} has no LOD chain")))?;
+        let chain = &chains[c];
+        debug_assert_eq!(chain.source, mesh as usize);
+        let name = nodes[i]
+            .get("name")
+            .and_then(Value::as_str)
+            .map_or_else(|| chain.name.clone(), String::from);
+        if let Some(obj) = nodes[i].as_object_mut() {
+            if quantize {
+                obj.remove("skin");
+            }
+            obj.remove("weights");
+        }
+        if quantize {
+            // The dequantization lives on new child nodes.
+            if let Some(obj) = nodes[i].as_object_mut() {
+                obj.remove("mesh");
+            }
+            let transform = dequant_transform(chain, true);
+            let mut node = transform.clone();
+            node.insert("name".into(), format!("{name}_LOD0").into());
+            nodes.push(Value::Object(node));
+            let first = nodes.len() - 1;
+            match nodes[i].get_mut("children") {
+                Some(Value::Array(children)) => children.push(first.into()),
+                _ => nodes[i]["children"] = json!([first]),
+            }
+            add_lod_nodes(
+                &mut nodes,
+                first,
+                &name,
+                &chain_meshes[c],
+                &chain.coverages,
+                &transform,
+            );
+        } else {
+            let template = nodes[i].as_object().cloned().unwrap_or_default();
+            add_lod_nodes(
+                &mut nodes,
+                i,
+                &name,
+                &chain_meshes[c],
+                &chain.coverages,
+                &template,
+            );
+        }
+    }
+    if !nodes.is_empty() {
+        root.insert("nodes".into(), nodes.into());
+    }
+    Ok(())
+}

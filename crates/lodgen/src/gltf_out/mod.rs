@@ -1,0 +1,151 @@
+//! The glTF writer: serializes a [`Scene`] and its [`LodMesh`] chains as glTF
+//! 2.0 (`.gltf` + one `.bin` per level, or `.glb`) with `MSFT_lod`.
+//!
+//! This module owns the output file format: the per-level vertex post-pass
+//! (meshopt vertex cache and fetch order, normals when missing), the buffer
+//! layout, optional `KHR_mesh_quantization` and `EXT_meshopt_compression`, and
+//! the atomic write. It does not simplify, measure or print.
+//!
+//! # Structure
+//! - Every level of every chain is its own glTF mesh on its own node. The
+//!   finest level's node carries `extensions.MSFT_lod.ids` (finer → coarser node
+//!   indices) and `extras.MSFT_screencoverage` (one value per level, the last
+//!   being the cull threshold, see [`crate::coverage`]). Coarser nodes are in no
+//!   scene and are no node's children: `MSFT_lod` clients load them in place of
+//!   the finest node (Babylon.js parents them like it), others ignore them.
+//!   Coarser nodes carry the finest node's local transform (`matrix` or TRS),
+//!   no children.
+//! - `Origin::Flat`: one scene with one root node per chain.
+//! - `Origin::Gltf`: the input's nodes, hierarchy, transforms, cameras,
+//!   materials, textures, samplers and images are kept (images stored in buffer
+//!   views are copied, external image files are embedded); the node that
+//!   referenced mesh `m` gets level 0 of `m`'s chain. Animations of node
+//!   transforms are kept (keyframes copied into the non-LOD range; they drive
+//!   the node they target, so in unquantized output the coarser LOD nodes do
+//!   not follow them). Skins are kept with their inverse bind matrices, and
+//!   every LOD node keeps the `skin` of the node it replaces (the levels
+//!   carry JOINTS_n / WEIGHTS_n), except with `quantize`, whose
+//!   dequantization lives in node transforms that skinning ignores: then
+//!   skins are dropped. `weights` channels and the nodes' morph `weights`
+//!   are dropped since the new meshes have no morph targets.
+//! - With `quantize`, positions are normalized `i16` in a cube around the
+//!   chain's bounding box; the dequantization (translation + uniform scale) is
+//!   the transform of the LOD nodes. For glTF input the LOD nodes are then new
+//!   children of the node that referenced the mesh, so that node's own children
+//!   do not inherit the dequantization. The other attributes keep compact
+//!   formats (`KHR_mesh_quantization` and the core spec): NORMAL and TANGENT
+//!   normalized `i8`, TEXCOORD_n normalized `u16` when within [0, 1] (float
+//!   otherwise), COLOR_n normalized `u8` when within [0, 1], WEIGHTS_n
+//!   normalized `u8` with each vertex's sets summing to exactly 255, JOINTS_n
+//!   `u8` when every joint index of the primitive is below 256 (`u16`
+//!   otherwise). Without `quantize`: floats, `u16` joints.
+//!
+//! # Buffer layout
+//! Each level's vertex and index data (all chains' level `k`) is one buffer
+//! range: for `.gltf` the file `STEM.lodK.bin`, for `.glb` one contiguous range
+//! of the BIN chunk. BIN chunk order: non-LOD data (images) first, then the
+//! levels coarsest first (`lod(n-1)`, …, `lod0`), so a client that streams
+//! coarse-first (Babylon.js `MSFT_lod` with range requests) reads a prefix.
+//! Non-LOD data of `.gltf` output goes to `STEM.bin`. With meshopt compression
+//! the ranges hold the compressed streams and each level also gets a
+//! placeholder fallback buffer (no data, `fallback: true`).
+//!
+//! # Files
+//! `prepare` (validation, meshopt post-pass, normals) → `builder` (buffers,
+//! views, accessors, meshes; `codec` the quantized and compressed encodings)
+//! → `document` (the root JSON; `input` what is carried over from a glTF
+//! input, `msft_lod` the LOD nodes) → `files` (buffer layout, GLB, atomic
+//! write).
+
+mod builder;
+mod codec;
+mod document;
+mod error;
+mod files;
+mod input;
+mod msft_lod;
+mod options;
+mod prepare;
+
+use std::path::Path;
+
+use crate::scene::{LodMesh, Origin, Scene};
+
+use builder::Builder;
+use document::{flat_document, gltf_document};
+pub use error::{LevelProblem, WriteError};
+use files::{write_atomically, Format};
+pub use options::{Compression, MeshSummary, WriteOptions, WriteSummary};
+use prepare::prepare_chains;
+
+/// Writes `scene` with every mesh replaced by its LOD chain to `path`
+/// (`.glb` or `.gltf` by extension). `lods[i].levels[0]` is the finest level;
+/// each level's `screen_coverage` is written as `MSFT_screencoverage`.
+///
+/// The output is written to temporary files in the target directory and
+/// renamed at the end; on error no output (and no temporary file) remains.
+/// The bytes are a pure function of the arguments.
+pub fn write_lods(
+    path: &Path,
+    scene: &Scene,
+    lods: &[LodMesh],
+    opts: &WriteOptions,
+) -> Result<WriteSummary, WriteError> {
+    let format = match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("glb") => Format::Glb,
+        Some(e) if e.eq_ignore_ascii_case("gltf") => Format::Gltf,
+        _ => {
+            return Err(WriteError::UnknownFormat {
+                path: path.to_path_buf(),
+            })
+        }
+    };
+    let material_count = match &scene.origin {
+        Origin::Flat => scene.materials.len(),
+        Origin::Gltf { document, .. } => document.materials.len(),
+    };
+    let chains = prepare_chains(scene, lods, material_count)?;
+    let level_count = chains.iter().map(|c| c.levels.len()).max().unwrap_or(0);
+
+    let mut out = Builder::new(level_count, opts);
+    let mut summary = WriteSummary::default();
+    let mut chain_meshes = Vec::with_capacity(chains.len());
+    for chain in &chains {
+        let (meshes, bytes) = out.add_chain(chain)?;
+        chain_meshes.push(meshes);
+        summary.meshes.push(MeshSummary {
+            name: chain.name.clone(),
+            level_bytes: bytes,
+        });
+    }
+
+    let mut root = match &scene.origin {
+        Origin::Flat => flat_document(scene, &chains, &chain_meshes, &mut out),
+        Origin::Gltf {
+            path: input_path,
+            document,
+            buffers,
+        } => gltf_document(
+            input_path,
+            document,
+            buffers,
+            lods,
+            &chains,
+            &chain_meshes,
+            &mut out,
+        )?,
+    };
+
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("lodgen")
+        .to_string();
+    let files = out.finish(&mut root, format, path, &stem)?;
+    write_atomically(&files)?;
+    summary.files = files
+        .iter()
+        .map(|(p, bytes)| (p.clone(), bytes.len() as u64))
+        .collect();
+    Ok(summary)
+}

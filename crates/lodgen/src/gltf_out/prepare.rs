@@ -1,0 +1,308 @@
+//! Per-level preparation: validates every primitive of every level (typed
+//! [`LevelProblem`]s), computes missing normals, applies meshopt's vertex
+//! cache and fetch order, and the chain's dequantization box.
+
+use crate::scene::{LodMesh, Primitive, Scene};
+
+use super::error::{LevelProblem, WriteError};
+
+/// One primitive after validation and the meshopt post-pass.
+pub(super) struct Prepared {
+    pub(super) material: Option<usize>,
+    pub(super) positions: Vec<[f32; 3]>,
+    pub(super) normals: Vec<[f32; 3]>,
+    pub(super) texcoords: Option<Vec<[f32; 2]>>,
+    pub(super) tangents: Option<Vec<[f32; 4]>>,
+    pub(super) extra_texcoords: Vec<Vec<[f32; 2]>>,
+    pub(super) colors: Option<Vec<[f32; 4]>>,
+    pub(super) joints: Option<Vec<[u16; 4]>>,
+    pub(super) weights: Option<Vec<[f32; 4]>>,
+    pub(super) extra_colors: Vec<Vec<[f32; 4]>>,
+    pub(super) extra_joints: Vec<Vec<[u16; 4]>>,
+    pub(super) extra_weights: Vec<Vec<[f32; 4]>>,
+    pub(super) indices: Vec<u32>,
+}
+
+pub(super) struct PreparedChain {
+    pub(super) name: String,
+    pub(super) source: usize,
+    /// Per level: its non-empty primitives.
+    pub(super) levels: Vec<Vec<Prepared>>,
+    pub(super) coverages: Vec<f64>,
+    /// Dequantization (center, uniform half extent) over all levels.
+    pub(super) dequant: ([f64; 3], f64),
+}
+
+pub(super) fn prepare_chains(
+    scene: &Scene,
+    lods: &[LodMesh],
+    material_count: usize,
+) -> Result<Vec<PreparedChain>, WriteError> {
+    let mut seen = vec![false; scene.meshes.len()];
+    let mut chains = Vec::with_capacity(lods.len());
+    for lod in lods {
+        let invalid = |reason: String| WriteError::InvalidChain {
+            mesh: lod.name.clone(),
+            reason,
+        };
+        match seen.get_mut(lod.source) {
+            None => {
+                return Err(invalid(format!(
+                    "source mesh {} does not exist ({} meshes)",
+                    lod.source,
+                    scene.meshes.len()
+                )))
+            }
+            Some(true) => {
+                return Err(invalid(format!(
+                    "source mesh {} has a second LOD chain",
+                    lod.source
+                )))
+            }
+            Some(s) => *s = true,
+        }
+        if lod.levels.is_empty() {
+            return Err(invalid("no levels".into()));
+        }
+        let mut levels = Vec::with_capacity(lod.levels.len());
+        let mut coverages = Vec::with_capacity(lod.levels.len());
+        for (k, level) in lod.levels.iter().enumerate() {
+            let bad = |primitive: usize, problem: LevelProblem| WriteError::InvalidLevel {
+                mesh: lod.name.clone(),
+                level: k,
+                primitive,
+                problem,
+            };
+            let value = level.screen_coverage;
+            let previous = coverages.last().copied().unwrap_or(1.0);
+            if !(0.0..=1.0).contains(&value) || value > previous {
+                return Err(bad(0, LevelProblem::Coverage { value }));
+            }
+            coverages.push(value);
+            let mut prims = Vec::with_capacity(level.primitives.len());
+            for (i, p) in level.primitives.iter().enumerate() {
+                if let Some(prepared) = prepare(p, material_count).map_err(|e| bad(i, e))? {
+                    prims.push(prepared);
+                }
+            }
+            if prims.is_empty() {
+                return Err(bad(0, LevelProblem::Empty));
+            }
+            levels.push(prims);
+        }
+        let dequant = dequantization(&levels);
+        chains.push(PreparedChain {
+            name: lod.name.clone(),
+            source: lod.source,
+            levels,
+            coverages,
+            dequant,
+        });
+    }
+    Ok(chains)
+}
+
+/// Validates `p`, computes missing normals and applies meshopt's vertex cache
+/// and vertex fetch optimizations. `None` for a primitive without triangles.
+fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, LevelProblem> {
+    validate(p, material_count)?;
+    if p.indices.is_empty() {
+        return Ok(None);
+    }
+    let n = p.positions.len();
+    let mut indices = meshopt::optimize_vertex_cache(&p.indices, n);
+    // Vertex fetch order on an identity stream: `order[new] = old`, which then
+    // reorders every attribute the same way (unused vertices are dropped).
+    let identity: Vec<u32> = (0..n as u32).collect();
+    let order = meshopt::optimize_vertex_fetch(&mut indices, &identity);
+    let pick = |v: &[[f32; 3]]| -> Vec<[f32; 3]> { order.iter().map(|&o| v[o as usize]).collect() };
+    let positions = pick(&p.positions);
+    let computed = area_weighted_normals(&positions, &indices);
+    let normals = match &p.normals {
+        None => computed,
+        Some(given) => pick(given)
+            .iter()
+            .zip(&computed)
+            .map(|(g, c)| normalized(*g).unwrap_or(*c))
+            .collect(),
+    };
+    fn reorder<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
+        order.iter().map(|&o| v[o as usize]).collect()
+    }
+    Ok(Some(Prepared {
+        material: p.material,
+        positions,
+        normals,
+        texcoords: p.texcoords.as_deref().map(|v| reorder(v, &order)),
+        tangents: p.tangents.as_deref().map(|v| reorder(v, &order)),
+        extra_texcoords: p
+            .extra_texcoords
+            .iter()
+            .map(|v| reorder(v, &order))
+            .collect(),
+        colors: p.colors.as_deref().map(|v| reorder(v, &order)),
+        joints: p.joints.as_deref().map(|v| reorder(v, &order)),
+        weights: p.weights.as_deref().map(|v| reorder(v, &order)),
+        extra_colors: p.extra_colors.iter().map(|v| reorder(v, &order)).collect(),
+        extra_joints: p.extra_joints.iter().map(|v| reorder(v, &order)).collect(),
+        extra_weights: p.extra_weights.iter().map(|v| reorder(v, &order)).collect(),
+        indices,
+    }))
+}
+
+/// The checks of [`prepare`]: index count, vertex count, material, index
+/// range, every attribute's length and finiteness, finite positions.
+fn validate(p: &Primitive, material_count: usize) -> Result<(), LevelProblem> {
+    let n = p.positions.len();
+    if p.indices.len() % 3 != 0 {
+        return Err(LevelProblem::IndexCount(p.indices.len()));
+    }
+    if u32::try_from(n).is_err() {
+        return Err(LevelProblem::TooManyVertices);
+    }
+    if let Some(material) = p.material {
+        if material >= material_count {
+            return Err(LevelProblem::MaterialOutOfRange {
+                material,
+                count: material_count,
+            });
+        }
+    }
+    if let Some((i, &index)) = p.indices.iter().enumerate().find(|(_, &v)| v as usize >= n) {
+        return Err(LevelProblem::IndexOutOfRange {
+            triangle: i / 3,
+            index,
+            vertex_count: n,
+        });
+    }
+    let check_len = |attribute: &'static str, len: usize| {
+        if len == n {
+            Ok(())
+        } else {
+            Err(LevelProblem::AttributeLength {
+                attribute,
+                len,
+                vertex_count: n,
+            })
+        }
+    };
+    if let Some(normals) = &p.normals {
+        check_len("NORMAL", normals.len())?;
+    }
+    if let Some(uv) = &p.texcoords {
+        check_len("TEXCOORD_0", uv.len())?;
+        if let Some(vertex) = uv.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
+            return Err(LevelProblem::NonFinite {
+                attribute: "TEXCOORD_0",
+                vertex,
+            });
+        }
+    }
+    fn finite<const N: usize>(
+        v: &Option<Vec<[f32; N]>>,
+        attribute: &'static str,
+        check_len: &dyn Fn(&'static str, usize) -> Result<(), LevelProblem>,
+    ) -> Result<(), LevelProblem> {
+        if let Some(v) = v {
+            check_len(attribute, v.len())?;
+            if let Some(vertex) = v.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
+                return Err(LevelProblem::NonFinite { attribute, vertex });
+            }
+        }
+        Ok(())
+    }
+    finite(&p.tangents, "TANGENT", &check_len)?;
+    finite(&p.colors, "COLOR_0", &check_len)?;
+    finite(&p.weights, "WEIGHTS_0", &check_len)?;
+    for uv in &p.extra_texcoords {
+        finite(&Some(uv.clone()), "TEXCOORD_n", &check_len)?;
+    }
+    if let Some(j) = &p.joints {
+        check_len("JOINTS_0", j.len())?;
+    }
+    for c in &p.extra_colors {
+        finite(&Some(c.clone()), "COLOR_n", &check_len)?;
+    }
+    for w in &p.extra_weights {
+        finite(&Some(w.clone()), "WEIGHTS_n", &check_len)?;
+    }
+    for j in &p.extra_joints {
+        check_len("JOINTS_n", j.len())?;
+    }
+    if let Some(vertex) = p
+        .positions
+        .iter()
+        .position(|v| v.iter().any(|c| !c.is_finite()))
+    {
+        return Err(LevelProblem::NonFinite {
+            attribute: "POSITION",
+            vertex,
+        });
+    }
+    Ok(())
+}
+
+fn normalized(v: [f32; 3]) -> Option<[f32; 3]> {
+    let len = (v[0] as f64).hypot(v[1] as f64).hypot(v[2] as f64);
+    if len.is_finite() && len > 1e-20 {
+        Some([
+            (v[0] as f64 / len) as f32,
+            (v[1] as f64 / len) as f32,
+            (v[2] as f64 / len) as f32,
+        ])
+    } else {
+        None
+    }
+}
+
+/// Per-vertex normals as the sum of the incident triangles' unnormalized
+/// normals (weights = twice the areas), normalized; `+Z` where that sum is 0.
+fn area_weighted_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+    let mut acc = vec![[0.0f64; 3]; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let p = |i: u32| positions[i as usize].map(f64::from);
+        let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        for &i in t {
+            for (s, d) in acc[i as usize].iter_mut().zip(n) {
+                *s += d;
+            }
+        }
+    }
+    acc.iter()
+        .map(|n| {
+            let len = n[0].hypot(n[1]).hypot(n[2]);
+            if len > 0.0 && len.is_finite() {
+                [
+                    (n[0] / len) as f32,
+                    (n[1] / len) as f32,
+                    (n[2] / len) as f32,
+                ]
+            } else {
+                [0.0, 0.0, 1.0]
+            }
+        })
+        .collect()
+}
+
+/// Center and uniform half extent of the chain's bounding box (half extent 1
+/// for a degenerate box).
+fn dequantization(levels: &[Vec<Prepared>]) -> ([f64; 3], f64) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in levels.iter().flatten().flat_map(|p| &p.positions) {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a] as f64);
+            hi[a] = hi[a].max(p[a] as f64);
+        }
+    }
+    let center = [0, 1, 2].map(|a| (lo[a] + hi[a]) * 0.5);
+    let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
+    (center, if half > 0.0 { half } else { 1.0 })
+}
