@@ -17,6 +17,34 @@ pub struct Scene {
     /// Where the scene came from; the glTF writer uses it to keep the
     /// input's node hierarchy, transforms, materials and textures.
     pub origin: Origin,
+    /// What the reader left out or could not read, each naming its place
+    /// (a primitive it could not read, points and lines): nothing is
+    /// dropped without one. `--strict` turns them into an error.
+    pub warnings: Vec<Warning>,
+}
+
+/// Something left out or written differently from the input, and where:
+/// `at` names the place (`meshes[2].primitives[0] (mesh "door")`, a level,
+/// an animation), `message` what happened.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Warning {
+    pub at: String,
+    pub message: String,
+}
+
+impl Warning {
+    pub fn new(at: impl Into<String>, message: impl Into<String>) -> Self {
+        Warning {
+            at: at.into(),
+            message: message.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.at, self.message)
+    }
 }
 
 /// The input file a [`Scene`] was read from.
@@ -80,8 +108,59 @@ pub struct Primitive {
     pub extra_joints: Vec<Vec<[u16; 4]>>,
     /// `WEIGHTS_1`, `WEIGHTS_2`, …: the weights of `extra_joints[i]`.
     pub extra_weights: Vec<Vec<[f32; 4]>>,
+    /// glTF morph targets, in order: per-vertex displacements, each present
+    /// channel with `positions.len()` entries.
+    pub targets: Vec<MorphTarget>,
     /// Triangle list: `indices.len() % 3 == 0`, every index `< positions.len()`.
     pub indices: Vec<u32>,
+}
+
+/// One morph target of a [`Primitive`]: displacements added to the base
+/// attributes with the target's weight (glTF `targets[i]`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MorphTarget {
+    /// `POSITION` displacements.
+    pub positions: Option<Vec<[f32; 3]>>,
+    /// `NORMAL` displacements.
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// `TANGENT` displacements (xyz; glTF targets have no w).
+    pub tangents: Option<Vec<[f32; 3]>>,
+}
+
+impl MorphTarget {
+    /// The present channels in glTF order: `("POSITION", …)`, `("NORMAL", …)`,
+    /// `("TANGENT", …)`.
+    pub fn channels(&self) -> impl Iterator<Item = (&'static str, &Vec<[f32; 3]>)> {
+        [
+            ("POSITION", &self.positions),
+            ("NORMAL", &self.normals),
+            ("TANGENT", &self.tangents),
+        ]
+        .into_iter()
+        .filter_map(|(name, c)| c.as_ref().map(|c| (name, c)))
+    }
+
+    /// The same channels as `self`, empty.
+    pub fn empty_like(&self) -> MorphTarget {
+        MorphTarget {
+            positions: self.positions.as_ref().map(|_| Vec::new()),
+            normals: self.normals.as_ref().map(|_| Vec::new()),
+            tangents: self.tangents.as_ref().map(|_| Vec::new()),
+        }
+    }
+
+    /// Appends vertex `v` of `from` (same channels) to every channel.
+    pub fn push_from(&mut self, from: &MorphTarget, v: usize) {
+        for (to, from) in [
+            (&mut self.positions, &from.positions),
+            (&mut self.normals, &from.normals),
+            (&mut self.tangents, &from.tangents),
+        ] {
+            if let Some(to) = to {
+                to.push(from.as_ref().map_or([0.0; 3], |f| f[v]));
+            }
+        }
+    }
 }
 
 impl Primitive {

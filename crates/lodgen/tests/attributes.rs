@@ -255,6 +255,7 @@ fn every_vertex_attribute_round_trips_through_gltf() {
         }],
         materials: Vec::new(),
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     let lod = LodMesh {
         source: 0,

@@ -32,6 +32,7 @@ fn textured_scene() -> (Scene, lodgen::scene::LodMesh) {
             base_color: Some([0.2, 0.4, 0.6, 1.0]),
         }],
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     let lod = chain("ball", 0, prim, &[0.5, 0.1]);
     (scene, lod)
@@ -307,6 +308,7 @@ fn attribute_scene() -> (Scene, lodgen::scene::LodMesh) {
             base_color: Some([0.2, 0.4, 0.6, 1.0]),
         }],
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     let lod = chain("ball", 0, prim, &[0.25]);
     (scene, lod)

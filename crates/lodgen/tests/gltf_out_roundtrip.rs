@@ -32,6 +32,7 @@ fn sphere_scene(n: u32) -> (Scene, Primitive) {
             base_color: Some([1.0, 0.0, 0.0, 1.0]),
         }],
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     (scene, prim)
 }
@@ -265,6 +266,7 @@ fn several_meshes_u16_and_u32_indices() {
         ],
         materials: scene_b.materials.clone(),
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     let mut lod_big = LodMesh {
         source: 0,
@@ -504,6 +506,7 @@ fn gltf_scene() -> (Scene, LodMesh) {
             document: Box::new(doc),
             buffers: vec![data],
         },
+        warnings: Vec::new(),
     };
     let lod = chain("sphere", 0, prim, &[0.4, 0.1]);
     (scene, lod)
@@ -772,6 +775,7 @@ fn skinned_scene() -> (Scene, LodMesh) {
             document: Box::new(doc),
             buffers: vec![data],
         },
+        warnings: Vec::new(),
     };
     let lod = chain("skinned", 0, prim, &[0.4, 0.1]);
     (scene, lod)

@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
-use lodgen::io::{read_gltf, read_scene, ErrorKind, Location, ReadError};
+use lodgen::io::{
+    read_gltf, read_gltf_with, read_scene, ErrorKind, Location, ReadError, ReadOptions,
+};
 use lodgen::scene::{Origin, Scene};
 use serde_json::{json, Value};
 
@@ -172,6 +174,8 @@ fn check_scene(s: &Scene) {
     assert_eq!(document.nodes[0].children.as_ref().map(Vec::len), Some(1));
     assert_eq!(buffers.len(), 1);
     assert_eq!(buffers[0].len(), 180);
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert_eq!(s.warnings[0].at, "meshes[0].primitives[2] (mesh `multi`)");
 }
 
 #[test]
@@ -206,13 +210,44 @@ fn glb_from_file_and_external_bin() {
     assert_eq!(path, &glb);
 }
 
+/// The error of reading the edited document with `--strict` (the points
+/// primitive, which would be left out with a warning, removed first).
 fn broken(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> ReadError {
     let (mut doc, mut bin) = document();
+    doc["meshes"][0]["primitives"]
+        .as_array_mut()
+        .unwrap()
+        .remove(2);
     edit(&mut doc, &mut bin);
-    match read_gltf(&gltf_bytes(doc, &bin), Path::new("b.gltf")) {
+    let strict = ReadOptions { strict: true };
+    match read_gltf_with(&gltf_bytes(doc, &bin), Path::new("b.gltf"), &strict) {
         Ok(_) => panic!("expected an error"),
         Err(e) => e,
     }
+}
+
+/// Without `--strict`, a primitive that cannot be read is left out with a
+/// warning naming it and the cause; the rest of the file is read.
+#[test]
+fn a_broken_primitive_is_left_out_with_a_warning() {
+    let (mut doc, mut bin) = document();
+    bin[164..166].copy_from_slice(&7u16.to_le_bytes());
+    doc["meshes"][0]["primitives"][1]["attributes"]["_BLEND"] = json!(0);
+    let s =
+        read_gltf(&gltf_bytes(doc, &bin), Path::new("w.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    let texts: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(
+        texts,
+        [
+            "meshes[0].primitives[0] (mesh `multi`): cannot be read, left out: \
+             meshes[0].primitives[0].indices[2]: index refers to vertex 7, but only 5 are defined",
+            "meshes[0].primitives[1] (mesh `multi`): attributes _BLEND are not carried into the output",
+            "meshes[0].primitives[2] (mesh `multi`): points or lines: left out (lodgen writes triangles)",
+        ]
+    );
+    // the strip and the fan are still read, and the other mesh
+    assert_eq!(s.meshes[0].primitives.len(), 2);
+    assert_eq!(s.meshes[1].primitives.len(), 1);
 }
 
 #[test]
@@ -239,15 +274,27 @@ fn nan_position_names_the_vertex() {
 }
 
 #[test]
-fn mesh_of_only_points_and_lines_is_an_error_naming_it() {
-    let e = broken(|doc, _| {
+fn mesh_of_only_points_and_lines_is_left_out_with_a_warning() {
+    let points_and_lines = |doc: &mut Value| {
         doc["meshes"][1]["primitives"] = json!([{"attributes": {"POSITION": 5}, "mode": 0}, {"attributes": {"POSITION": 5}, "mode": 1}]);
-    });
-    assert_eq!(e.location, Location::Json("meshes[1]".to_owned()));
-    assert!(
-        e.to_string().contains("mesh 1 `plain` has no triangles"),
-        "{e}"
+    };
+    let s = read_edited(points_and_lines);
+    assert!(s.meshes[1].primitives.is_empty());
+    let last: Vec<String> = s.warnings[1..].iter().map(|w| w.to_string()).collect();
+    assert_eq!(
+        last,
+        [
+            "meshes[1].primitives[0] (mesh `plain`): points or lines: left out (lodgen writes triangles)",
+            "meshes[1].primitives[1] (mesh `plain`): points or lines: left out (lodgen writes triangles)",
+            "meshes[1] (mesh `plain`): no triangles left: the mesh is left out of the output",
+        ]
     );
+    let e = broken(|doc, _| points_and_lines(doc));
+    assert_eq!(
+        e.location,
+        Location::Json("meshes[1].primitives[0]".to_owned())
+    );
+    assert!(e.to_string().contains("points or lines"), "{e}");
 }
 
 #[test]

@@ -25,22 +25,28 @@ use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::Checked;
 use gltf::json::Root;
 
-use super::{check_not_empty, ErrorKind, Location, ReadError};
-use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
-
-/// Most elements of an accessor without buffer view (all zeros plus sparse
-/// values): a corrupt `count` would otherwise abort on allocation.
-/// Accessors with a buffer view are bounded by the buffer's size instead.
-const MAX_ELEMENTS: usize = 1 << 24;
+use super::{check_not_empty, ErrorKind, Location, ReadError, ReadOptions};
+use crate::scene::{Material, MorphTarget, Origin, Primitive, Scene, SourceMesh, Warning};
 
 /// Required extensions this reader supports although the `gltf` crate's
 /// validation does not: quantized attributes are plain integer accessors.
 const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization", super::meshopt_in::EXTENSION];
 
 /// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
-/// resolved against the directory of `path`.
+/// resolved against the directory of `path`. What cannot be read in one
+/// primitive or mesh is left out with a warning in [`Scene::warnings`].
 pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
-    let r = Reader { path };
+    read_gltf_with(src, path, &ReadOptions::default())
+}
+
+/// [`read_gltf`] with options: with `strict`, the first primitive or mesh
+/// that would be left out with a warning is an error instead.
+pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Scene, ReadError> {
+    let r = Reader {
+        path,
+        strict: opts.strict,
+        budget: std::cell::Cell::new(0),
+    };
     let (json, blob) = if src.starts_with(b"glTF") {
         r.split_glb(src)?
     } else {
@@ -101,10 +107,15 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         .map(super::meshopt_in::fallback_buffers)
         .unwrap_or_default();
     let mut buffers = r.load_buffers(&root, blob, &fallback)?;
+    // the memory cap: decoded data per byte of input (file and buffers)
+    let input = src.len() as u64 + buffers.iter().map(|b| b.len() as u64).sum::<u64>();
+    let mut budget = super::DECODED_BYTES_FLOOR
+        .saturating_add(input.saturating_mul(super::DECODED_BYTES_PER_INPUT_BYTE));
     if let Some(raw) = &raw {
-        super::meshopt_in::decompress(raw, &mut root, &mut buffers)
+        super::meshopt_in::decompress(raw, &mut root, &mut buffers, &mut budget)
             .map_err(|(at, message)| r.json_err(&at, message))?;
     }
+    r.budget.set(budget);
 
     let materials = root
         .materials
@@ -114,31 +125,8 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
             base_color: Some(m.pbr_metallic_roughness.base_color_factor.0),
         })
         .collect();
-    let mut meshes = Vec::with_capacity(root.meshes.len());
-    for (mi, mesh) in root.meshes.iter().enumerate() {
-        let mut primitives = Vec::new();
-        for (pi, prim) in mesh.primitives.iter().enumerate() {
-            let at = format!("meshes[{mi}].primitives[{pi}]");
-            if let Some(p) = r.primitive(&root, &buffers, prim, &at)? {
-                if p.triangle_count() > 0 {
-                    primitives.push(p);
-                }
-            }
-        }
-        if primitives.is_empty() {
-            let name = mesh.name.as_deref().unwrap_or("");
-            return Err(r.err(
-                Location::Json(format!("meshes[{mi}]")),
-                ErrorKind::Invalid(format!(
-                    "mesh {mi} `{name}` has no triangles (only points, lines or empty primitives)"
-                )),
-            ));
-        }
-        meshes.push(SourceMesh {
-            name: mesh.name.clone().unwrap_or_else(|| format!("mesh{mi}")),
-            primitives,
-        });
-    }
+    let mut warnings = Vec::new();
+    let meshes = r.meshes(&root, &buffers, &mut warnings)?;
     let scene = Scene {
         meshes,
         materials,
@@ -147,13 +135,26 @@ pub fn read_gltf(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
             document: Box::new(root),
             buffers,
         },
+        warnings,
     };
-    check_not_empty(&scene, path)?;
+    check_not_empty(&scene, path).map_err(|e| match scene.warnings.first() {
+        // nothing could be read: the first reason is the error
+        Some(w) => r.err(
+            Location::Json(w.at.clone()),
+            ErrorKind::Invalid(w.message.clone()),
+        ),
+        None => e,
+    })?;
     Ok(scene)
 }
 
 struct Reader<'a> {
     path: &'a Path,
+    /// A primitive or mesh that cannot be read is an error, not a warning.
+    strict: bool,
+    /// Bytes the reader may still allocate for decoded accessors (the
+    /// memory cap, [`super::DECODED_BYTES_PER_INPUT_BYTE`]).
+    budget: std::cell::Cell<u64>,
 }
 
 fn le_u32(b: &[u8], at: usize) -> Option<u32> {
@@ -286,7 +287,83 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    /// Reads one primitive; `None` for points and lines.
+    /// Every mesh, `meshes[i]` being glTF mesh `i`. A primitive that cannot
+    /// be read, points and lines, and attributes this reader does not know
+    /// are left out with a warning naming them; so is a mesh left with no
+    /// triangle (its `primitives` empty: the builder skips it and the writer
+    /// drops it from its nodes).
+    fn meshes(
+        &self,
+        root: &Root,
+        buffers: &[Vec<u8>],
+        warnings: &mut Vec<Warning>,
+    ) -> Result<Vec<SourceMesh>, ReadError> {
+        let mut meshes = Vec::with_capacity(root.meshes.len());
+        for (mi, mesh) in root.meshes.iter().enumerate() {
+            let name = mesh.name.clone().unwrap_or_else(|| format!("mesh{mi}"));
+            let mut primitives = Vec::new();
+            for (pi, prim) in mesh.primitives.iter().enumerate() {
+                let at = format!("meshes[{mi}].primitives[{pi}]");
+                let place = format!("{at} (mesh `{name}`)");
+                match self.primitive(root, buffers, prim, &at) {
+                    Ok(Some(p)) if p.triangle_count() > 0 => {
+                        let unread = PrimitiveReader {
+                            r: self,
+                            root,
+                            buffers,
+                            prim,
+                            at: &at,
+                        }
+                        .unread(&p);
+                        if !unread.is_empty() {
+                            warnings.push(Warning::new(
+                                place,
+                                format!(
+                                    "attributes {} are not carried into the output",
+                                    unread.join(", ")
+                                ),
+                            ));
+                        }
+                        primitives.push(p)
+                    }
+                    Ok(Some(_)) => {
+                        warnings.push(Warning::new(place, "no complete triangle: left out"))
+                    }
+                    Ok(None) => warnings.push(Warning::new(
+                        place,
+                        "points or lines: left out (lodgen writes triangles)",
+                    )),
+                    Err(e) if self.strict => return Err(e),
+                    Err(e) => {
+                        let reason = match &e.location {
+                            Location::Json(p) if p != &at => format!("{p}: {}", e.kind),
+                            _ => e.kind.to_string(),
+                        };
+                        warnings.push(Warning::new(
+                            place,
+                            format!("cannot be read, left out: {reason}"),
+                        ))
+                    }
+                }
+            }
+            if primitives.is_empty() {
+                warnings.push(Warning::new(
+                    format!("meshes[{mi}] (mesh `{name}`)"),
+                    "no triangles left: the mesh is left out of the output",
+                ));
+            }
+            if let (true, Some(w)) = (self.strict, warnings.first()) {
+                let at = w.at.split(' ').next().unwrap_or("").to_owned();
+                return Err(self.json_err(&at, w.message.clone()));
+            }
+            meshes.push(SourceMesh { name, primitives });
+        }
+        Ok(meshes)
+    }
+
+    /// Reads one primitive; `None` for points and lines. The steps:
+    /// [`PrimitiveReader::attributes`], [`PrimitiveReader::indices`],
+    /// [`PrimitiveReader::targets`], [`PrimitiveReader::material`].
     fn primitive(
         &self,
         root: &Root,
@@ -306,167 +383,27 @@ impl Reader<'_> {
         ) {
             return Ok(None);
         }
-        let attribute = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|i| i.value());
-        let pos_at = format!("{at}.attributes.POSITION");
-        let pos_acc = attribute(Semantic::Positions)
-            .ok_or_else(|| self.json_err(at, "primitive has no POSITION attribute".to_owned()))?;
-        let positions: Vec<[f32; 3]> = self.vectors(root, buffers, pos_acc, &pos_at)?;
+        let p = PrimitiveReader {
+            r: self,
+            root,
+            buffers,
+            prim,
+            at,
+        };
+        let positions: Vec<[f32; 3]> = match p.attribute(&Semantic::Positions) {
+            Some(a) => self.vectors(root, buffers, a, &format!("{at}.attributes.POSITION"))?,
+            None => return Err(self.json_err(at, "primitive has no POSITION attribute".to_owned())),
+        };
         let n = positions.len();
-        let normals = match attribute(Semantic::Normals) {
-            Some(a) => Some(self.same_count(
-                self.vectors(root, buffers, a, &format!("{at}.attributes.NORMAL"))?,
-                n,
-                at,
-                "NORMAL",
-            )?),
-            None => None,
-        };
-        let texcoords = match attribute(Semantic::TexCoords(0)) {
-            Some(a) => Some(self.same_count(
-                self.vectors(root, buffers, a, &format!("{at}.attributes.TEXCOORD_0"))?,
-                n,
-                at,
-                "TEXCOORD_0",
-            )?),
-            None => None,
-        };
-        let optional = |s: Semantic, name: &str| -> Result<Option<Vec<[f32; 4]>>, ReadError> {
-            let Some(a) = attribute(s) else {
-                return Ok(None);
-            };
-            let here = format!("{at}.attributes.{name}");
-            let (values, dims) = self.accessor(root, buffers, a, &here)?;
-            let v: Vec<[f32; 4]> = match dims {
-                // COLOR_n may be RGB: alpha 1
-                3 if name.starts_with("COLOR") => values
-                    .chunks_exact(3)
-                    .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
-                    .collect(),
-                4 => self.vectors(root, buffers, a, &here)?,
-                d => {
-                    return Err(self.json_err(&here, format!("{name} has {d} components")));
-                }
-            };
-            self.same_count(v, n, at, name).map(Some)
-        };
-        let tangents = optional(Semantic::Tangents, "TANGENT")?;
-        let joint_set = |set: u32| -> Result<Option<Vec<[u16; 4]>>, ReadError> {
-            let name = format!("JOINTS_{set}");
-            let Some(j) = optional(Semantic::Joints(set), &name)? else {
-                return Ok(None);
-            };
-            if let Some(i) = j.iter().position(|q| {
-                q.iter()
-                    .any(|&x| !(0.0..=65535.0).contains(&x) || x.fract() != 0.0)
-            }) {
-                return Err(self.json_err(
-                    &format!("{at}.attributes.{name}"),
-                    format!("vertex {i} has a joint index that is not a u16: {:?}", j[i]),
-                ));
-            }
-            Ok(Some(j.iter().map(|q| q.map(|x| x as u16)).collect()))
-        };
-        let colors = optional(Semantic::Colors(0), "COLOR_0")?;
-        let weights = optional(Semantic::Weights(0), "WEIGHTS_0")?;
-        let joints = joint_set(0)?;
-        let mut extra_colors = Vec::new();
-        while let Some(c) = optional(
-            Semantic::Colors(extra_colors.len() as u32 + 1),
-            &format!("COLOR_{}", extra_colors.len() + 1),
-        )? {
-            extra_colors.push(c);
-        }
-        let mut extra_joints = Vec::new();
-        while let Some(j) = joint_set(extra_joints.len() as u32 + 1)? {
-            extra_joints.push(j);
-        }
-        let mut extra_weights = Vec::new();
-        while let Some(w) = optional(
-            Semantic::Weights(extra_weights.len() as u32 + 1),
-            &format!("WEIGHTS_{}", extra_weights.len() + 1),
-        )? {
-            extra_weights.push(w);
-        }
-        let mut extra_texcoords = Vec::new();
-        for set in 1.. {
-            let Some(a) = attribute(Semantic::TexCoords(set)) else {
-                break;
-            };
-            let name = format!("TEXCOORD_{set}");
-            extra_texcoords.push(self.same_count(
-                self.vectors(root, buffers, a, &format!("{at}.attributes.{name}"))?,
-                n,
-                at,
-                &name,
-            )?);
-        }
-        let ind_at = format!("{at}.indices");
-        let raw: Vec<u32> = match prim.indices {
-            Some(acc) => {
-                let (values, dims) = self.accessor(root, buffers, acc.value(), &ind_at)?;
-                if dims != 1 {
-                    return Err(self.json_err(
-                        &ind_at,
-                        format!("index accessor {} is not SCALAR", acc.value()),
-                    ));
-                }
-                let mut out = Vec::with_capacity(values.len());
-                for (k, v) in values.into_iter().enumerate() {
-                    if !(v >= 0.0 && v.fract() == 0.0 && v < n as f64) {
-                        return Err(self.err(
-                            Location::Json(format!("{ind_at}[{k}]")),
-                            ErrorKind::IndexOutOfRange {
-                                what: "index",
-                                target: "vertex",
-                                index: v as i64,
-                                count: n,
-                            },
-                        ));
-                    }
-                    out.push(v as u32);
-                }
-                out
-            }
-            None => (0..n as u32).collect(),
-        };
-        let indices = match mode {
-            Mode::Triangles => {
-                if raw.len() % 3 != 0 {
-                    return Err(self.json_err(
-                        &ind_at,
-                        format!("{} indices is not a multiple of 3 for TRIANGLES", raw.len()),
-                    ));
-                }
-                raw
-            }
-            Mode::TriangleStrip => strip_to_list(&raw),
-            Mode::TriangleFan => fan_to_list(&raw),
-            _ => unreachable!("points and lines returned above"),
-        };
-        let material = prim.material.map(|m| m.value());
-        if let Some(m) = material {
-            if m >= root.materials.len() {
-                return Err(self.json_err(
-                    &format!("{at}.material"),
-                    format!("material {m} does not exist"),
-                ));
-            }
-        }
-        Ok(Some(Primitive {
-            material,
+        let mut out = Primitive {
             positions,
-            normals,
-            texcoords,
-            tangents,
-            extra_texcoords,
-            colors,
-            joints,
-            weights,
-            extra_colors,
-            extra_joints,
-            extra_weights,
-            indices,
-        }))
+            ..Primitive::default()
+        };
+        p.attributes(&mut out)?;
+        out.indices = p.indices(mode, n)?;
+        out.targets = p.targets(n)?;
+        out.material = p.material()?;
+        Ok(Some(out))
     }
 
     fn same_count<T>(
@@ -555,13 +492,19 @@ impl Reader<'_> {
                 let offset = acc.byte_offset.map_or(0, |o| o.0);
                 Some(self.view(root, buffers, view.value(), offset, count, elem, &here)?)
             }
-            None if count > MAX_ELEMENTS => {
-                return Err(bad(format!(
-                    "count {count} without bufferView is too large"
-                )));
-            }
             None => None,
         };
+        // f64 values, then the caller's f32 copy: 12 bytes per component
+        let bytes = (count as u64).saturating_mul(dims as u64 * 12);
+        if bytes > self.budget.get() {
+            return Err(bad(format!(
+                "{count} elements would pass the reader's memory cap ({} bytes per byte of \
+                 input, {} bytes left)",
+                super::DECODED_BYTES_PER_INPUT_BYTE,
+                self.budget.get()
+            )));
+        }
+        self.budget.set(self.budget.get() - bytes);
         let mut values = vec![0.0f64; count * dims];
         if let Some((data, stride)) = data {
             for i in 0..count {
@@ -668,6 +611,224 @@ impl Reader<'_> {
                     buffer.len()
                 )),
             )),
+        }
+    }
+}
+
+/// One primitive being read, and where it is (`meshes[m].primitives[p]`).
+struct PrimitiveReader<'a> {
+    r: &'a Reader<'a>,
+    root: &'a Root,
+    buffers: &'a [Vec<u8>],
+    prim: &'a gltf::json::mesh::Primitive,
+    at: &'a str,
+}
+
+impl PrimitiveReader<'_> {
+    fn attribute(&self, s: &Semantic) -> Option<usize> {
+        self.prim
+            .attributes
+            .get(&Checked::Valid(s.clone()))
+            .map(|i| i.value())
+    }
+
+    /// Attribute `name` as `N`-component vectors, `n` of them; `None` when absent.
+    fn vectors<const N: usize>(
+        &self,
+        s: Semantic,
+        name: &str,
+        n: usize,
+    ) -> Result<Option<Vec<[f32; N]>>, ReadError> {
+        let Some(a) = self.attribute(&s) else {
+            return Ok(None);
+        };
+        let here = format!("{}.attributes.{name}", self.at);
+        let v = self.r.vectors(self.root, self.buffers, a, &here)?;
+        self.r.same_count(v, n, self.at, name).map(Some)
+    }
+
+    /// A four-component attribute (TANGENT, COLOR_n, JOINTS_n, WEIGHTS_n);
+    /// an RGB colour gets alpha 1.
+    fn vec4(&self, s: Semantic, name: &str, n: usize) -> Result<Option<Vec<[f32; 4]>>, ReadError> {
+        let Some(a) = self.attribute(&s) else {
+            return Ok(None);
+        };
+        let here = format!("{}.attributes.{name}", self.at);
+        let (values, dims) = self.r.accessor(self.root, self.buffers, a, &here)?;
+        let v: Vec<[f32; 4]> = match dims {
+            3 if name.starts_with("COLOR") => values
+                .chunks_exact(3)
+                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
+                .collect(),
+            4 => self.r.vectors(self.root, self.buffers, a, &here)?,
+            d => return Err(self.r.json_err(&here, format!("{name} has {d} components"))),
+        };
+        self.r.same_count(v, n, self.at, name).map(Some)
+    }
+
+    /// `JOINTS_set`, checked to hold u16 joint indices.
+    fn joints(&self, set: u32, n: usize) -> Result<Option<Vec<[u16; 4]>>, ReadError> {
+        let name = format!("JOINTS_{set}");
+        let Some(j) = self.vec4(Semantic::Joints(set), &name, n)? else {
+            return Ok(None);
+        };
+        if let Some(i) = j.iter().position(|q| {
+            q.iter()
+                .any(|&x| !(0.0..=65535.0).contains(&x) || x.fract() != 0.0)
+        }) {
+            return Err(self.r.json_err(
+                &format!("{}.attributes.{name}", self.at),
+                format!("vertex {i} has a joint index that is not a u16: {:?}", j[i]),
+            ));
+        }
+        Ok(Some(j.iter().map(|q| q.map(|x| x as u16)).collect()))
+    }
+
+    /// Every attribute besides POSITION, each set up to the first missing one.
+    fn attributes(&self, out: &mut Primitive) -> Result<(), ReadError> {
+        let n = out.positions.len();
+        out.normals = self.vectors(Semantic::Normals, "NORMAL", n)?;
+        out.texcoords = self.vectors(Semantic::TexCoords(0), "TEXCOORD_0", n)?;
+        out.tangents = self.vec4(Semantic::Tangents, "TANGENT", n)?;
+        out.colors = self.vec4(Semantic::Colors(0), "COLOR_0", n)?;
+        out.weights = self.vec4(Semantic::Weights(0), "WEIGHTS_0", n)?;
+        out.joints = self.joints(0, n)?;
+        let next = |len: usize| len as u32 + 1;
+        while let Some(c) = self.vec4(
+            Semantic::Colors(next(out.extra_colors.len())),
+            &format!("COLOR_{}", next(out.extra_colors.len())),
+            n,
+        )? {
+            out.extra_colors.push(c);
+        }
+        while let Some(j) = self.joints(next(out.extra_joints.len()), n)? {
+            out.extra_joints.push(j);
+        }
+        while let Some(w) = self.vec4(
+            Semantic::Weights(next(out.extra_weights.len())),
+            &format!("WEIGHTS_{}", next(out.extra_weights.len())),
+            n,
+        )? {
+            out.extra_weights.push(w);
+        }
+        while let Some(t) = self.vectors(
+            Semantic::TexCoords(next(out.extra_texcoords.len())),
+            &format!("TEXCOORD_{}", next(out.extra_texcoords.len())),
+            n,
+        )? {
+            out.extra_texcoords.push(t);
+        }
+        Ok(())
+    }
+
+    /// The attributes of the primitive that [`Self::attributes`] did not
+    /// read (application-specific `_NAME`s, a set after a gap), by name.
+    fn unread(&self, p: &Primitive) -> Vec<String> {
+        let read = |s: &Semantic| match s {
+            Semantic::Positions | Semantic::Normals | Semantic::Tangents => true,
+            Semantic::TexCoords(i) => (*i as usize) <= p.extra_texcoords.len(),
+            Semantic::Colors(i) => (*i as usize) <= p.extra_colors.len(),
+            Semantic::Joints(i) => (*i as usize) <= p.extra_joints.len(),
+            Semantic::Weights(i) => (*i as usize) <= p.extra_weights.len(),
+            _ => false,
+        };
+        self.prim
+            .attributes
+            .keys()
+            .filter_map(|k| match k {
+                Checked::Valid(s) if read(s) => None,
+                Checked::Valid(s) => Some(s.to_string()),
+                Checked::Invalid => Some("(invalid)".to_owned()),
+            })
+            .collect()
+    }
+
+    /// The triangle list: the index accessor (or `0..n`), each index
+    /// checked, strips and fans unrolled.
+    fn indices(&self, mode: Mode, n: usize) -> Result<Vec<u32>, ReadError> {
+        let ind_at = format!("{}.indices", self.at);
+        let raw: Vec<u32> = match self.prim.indices {
+            Some(acc) => {
+                let (values, dims) =
+                    self.r
+                        .accessor(self.root, self.buffers, acc.value(), &ind_at)?;
+                if dims != 1 {
+                    return Err(self.r.json_err(
+                        &ind_at,
+                        format!("index accessor {} is not SCALAR", acc.value()),
+                    ));
+                }
+                let mut out = Vec::with_capacity(values.len());
+                for (k, v) in values.into_iter().enumerate() {
+                    if !(v >= 0.0 && v.fract() == 0.0 && v < n as f64) {
+                        return Err(self.r.err(
+                            Location::Json(format!("{ind_at}[{k}]")),
+                            ErrorKind::IndexOutOfRange {
+                                what: "index",
+                                target: "vertex",
+                                index: v as i64,
+                                count: n,
+                            },
+                        ));
+                    }
+                    out.push(v as u32);
+                }
+                out
+            }
+            None => (0..n as u32).collect(),
+        };
+        match mode {
+            Mode::TriangleStrip => Ok(strip_to_list(&raw)),
+            Mode::TriangleFan => Ok(fan_to_list(&raw)),
+            _ if raw.len() % 3 != 0 => Err(self.r.json_err(
+                &ind_at,
+                format!("{} indices is not a multiple of 3 for TRIANGLES", raw.len()),
+            )),
+            _ => Ok(raw),
+        }
+    }
+
+    /// The morph targets: POSITION / NORMAL / TANGENT displacements, `n`
+    /// each.
+    fn targets(&self, n: usize) -> Result<Vec<MorphTarget>, ReadError> {
+        let Some(targets) = &self.prim.targets else {
+            return Ok(Vec::new());
+        };
+        let mut out = Vec::with_capacity(targets.len());
+        for (t, target) in targets.iter().enumerate() {
+            let read = |acc: Option<gltf::json::Index<gltf::json::Accessor>>, name: &str| {
+                let Some(acc) = acc else {
+                    return Ok(None);
+                };
+                let here = format!("{}.targets[{t}].{name}", self.at);
+                let v: Vec<[f32; 3]> =
+                    self.r
+                        .vectors(self.root, self.buffers, acc.value(), &here)?;
+                if v.len() != n {
+                    return Err(self.r.json_err(
+                        &here,
+                        format!("{name} has {} entries, POSITION has {n}", v.len()),
+                    ));
+                }
+                Ok(Some(v))
+            };
+            out.push(MorphTarget {
+                positions: read(target.positions, "POSITION")?,
+                normals: read(target.normals, "NORMAL")?,
+                tangents: read(target.tangents, "TANGENT")?,
+            });
+        }
+        Ok(out)
+    }
+
+    fn material(&self) -> Result<Option<usize>, ReadError> {
+        let material = self.prim.material.map(|m| m.value());
+        match material {
+            Some(m) if m >= self.root.materials.len() => Err(self.r.json_err(
+                &format!("{}.material", self.at),
+                format!("material {m} does not exist"),
+            )),
+            _ => Ok(material),
         }
     }
 }

@@ -36,12 +36,15 @@ pub fn fallback_buffers(raw: &Value) -> Vec<usize> {
 }
 
 /// Decode every compressed view of `raw` (the document's JSON) into a new
-/// buffer appended to `buffers`, and point `root`'s view at it. Errors are
-/// `(JSON path, message)`.
+/// buffer appended to `buffers`, and point `root`'s view at it. Each
+/// decoded size is taken from `budget` (bytes the reader may still
+/// allocate, see [`super::DECODED_BYTES_PER_INPUT_BYTE`]) before it is
+/// allocated. Errors are `(JSON path, message)`.
 pub fn decompress(
     raw: &Value,
     root: &mut Root,
     buffers: &mut Vec<Vec<u8>>,
+    budget: &mut u64,
 ) -> Result<(), (String, String)> {
     let Some(views) = raw.get("bufferViews").and_then(Value::as_array) else {
         return Ok(());
@@ -52,118 +55,34 @@ pub fn decompress(
         };
         let at = format!("bufferViews[{i}].extensions.{EXTENSION}");
         let bad = |m: String| (at.clone(), m);
-        let int = |key: &str, default: Option<u64>| -> Result<usize, (String, String)> {
-            match ext.get(key) {
-                Some(x) => x
-                    .as_u64()
-                    .and_then(|x| usize::try_from(x).ok())
-                    .ok_or_else(|| bad(format!("{key} is not a non-negative integer"))),
-                None => default
-                    .map(|d| d as usize)
-                    .ok_or_else(|| bad(format!("{key} is missing"))),
-            }
-        };
-        let buffer = int("buffer", None)?;
-        let offset = int("byteOffset", Some(0))?;
-        let length = int("byteLength", None)?;
-        let stride = int("byteStride", None)?;
-        let count = int("count", None)?;
-        let mode = ext.get("mode").and_then(Value::as_str).unwrap_or("");
-        let filter = ext.get("filter").and_then(Value::as_str).unwrap_or("NONE");
+        let spec = Spec::parse(ext).map_err(bad)?;
         let src = buffers
-            .get(buffer)
-            .and_then(|b| b.get(offset..offset.checked_add(length)?))
+            .get(spec.buffer)
+            .and_then(|b| b.get(spec.offset..spec.offset.checked_add(spec.length)?))
             .ok_or_else(|| {
                 bad(format!(
-                    "bytes {offset}..+{length} of buffer {buffer} do not exist"
+                    "bytes {}..+{} of buffer {} do not exist",
+                    spec.offset, spec.length, spec.buffer
                 ))
             })?;
-        let size = count
-            .checked_mul(stride)
+        let size = spec
+            .count
+            .checked_mul(spec.stride)
             .filter(|&s| s <= 1 << 31)
-            .ok_or_else(|| bad(format!("{count} × {stride} bytes is too large")))?;
-        // u32 words: the filters work on aligned 16- and 32-bit components
-        let mut dst = vec![0u32; size.div_ceil(4)];
-        let out = dst.as_mut_ptr().cast::<std::ffi::c_void>();
-        let code = match mode {
-            "ATTRIBUTES" => {
-                if stride == 0 || stride % 4 != 0 || stride > 256 {
-                    return Err(bad(format!(
-                        "byteStride {stride} (ATTRIBUTES: 4..=256, a multiple of 4)"
-                    )));
-                }
-                // SAFETY: `dst` holds count × stride bytes, `src` its length.
-                unsafe {
-                    meshopt::ffi::meshopt_decodeVertexBuffer(
-                        out,
-                        count,
-                        stride,
-                        src.as_ptr(),
-                        src.len(),
-                    )
-                }
-            }
-            "TRIANGLES" | "INDICES" => {
-                if stride != 2 && stride != 4 {
-                    return Err(bad(format!("byteStride {stride} ({mode}: 2 or 4)")));
-                }
-                if mode == "TRIANGLES" && count % 3 != 0 {
-                    return Err(bad(format!("count {count} is not a multiple of 3")));
-                }
-                // SAFETY: as above, index size `stride`.
-                unsafe {
-                    if mode == "TRIANGLES" {
-                        meshopt::ffi::meshopt_decodeIndexBuffer(
-                            out,
-                            count,
-                            stride,
-                            src.as_ptr(),
-                            src.len(),
-                        )
-                    } else {
-                        meshopt::ffi::meshopt_decodeIndexSequence(
-                            out,
-                            count,
-                            stride,
-                            src.as_ptr(),
-                            src.len(),
-                        )
-                    }
-                }
-            }
-            other => return Err(bad(format!("unknown mode {other:?}"))),
-        };
-        if code != 0 {
+            .ok_or_else(|| {
+                bad(format!(
+                    "{} × {} bytes is too large",
+                    spec.count, spec.stride
+                ))
+            })?;
+        if size as u64 > *budget {
             return Err(bad(format!(
-                "meshoptimizer could not decode it (error {code})"
+                "decoding {size} bytes would pass the reader's memory cap ({} bytes left)",
+                *budget
             )));
         }
-        if mode == "ATTRIBUTES" {
-            let ok = match filter {
-                "NONE" => true,
-                "OCTAHEDRAL" | "COLOR" => stride == 4 || stride == 8,
-                "QUATERNION" => stride == 8,
-                "EXPONENTIAL" => true,
-                _ => return Err(bad(format!("unknown filter {filter:?}"))),
-            };
-            if !ok {
-                return Err(bad(format!("filter {filter} with byteStride {stride}")));
-            }
-            // SAFETY: `dst` is u32-aligned and holds count × stride bytes.
-            unsafe {
-                match filter {
-                    "OCTAHEDRAL" => meshopt::ffi::meshopt_decodeFilterOct(out, count, stride),
-                    "COLOR" => meshopt::ffi::meshopt_decodeFilterColor(out, count, stride),
-                    "QUATERNION" => meshopt::ffi::meshopt_decodeFilterQuat(out, count, stride),
-                    "EXPONENTIAL" => meshopt::ffi::meshopt_decodeFilterExp(out, count, stride),
-                    _ => {}
-                }
-            }
-        } else if filter != "NONE" {
-            return Err(bad(format!("filter {filter} on {mode}")));
-        }
-        let mut bytes: Vec<u8> = dst.iter().flat_map(|w| w.to_ne_bytes()).collect();
-        bytes.truncate(size);
+        *budget -= size as u64;
+        let bytes = spec.decode(src, size).map_err(bad)?;
         let view = root
             .buffer_views
             .get_mut(i)
@@ -182,4 +101,124 @@ pub fn decompress(
         });
     }
     Ok(())
+}
+
+/// One compressed view's extension object.
+struct Spec<'a> {
+    buffer: usize,
+    offset: usize,
+    length: usize,
+    stride: usize,
+    count: usize,
+    mode: &'a str,
+    filter: &'a str,
+}
+
+impl<'a> Spec<'a> {
+    fn parse(ext: &'a Value) -> Result<Spec<'a>, String> {
+        let int = |key: &str, default: Option<u64>| -> Result<usize, String> {
+            match ext.get(key) {
+                Some(x) => x
+                    .as_u64()
+                    .and_then(|x| usize::try_from(x).ok())
+                    .ok_or_else(|| format!("{key} is not a non-negative integer")),
+                None => default
+                    .map(|d| d as usize)
+                    .ok_or_else(|| format!("{key} is missing")),
+            }
+        };
+        Ok(Spec {
+            buffer: int("buffer", None)?,
+            offset: int("byteOffset", Some(0))?,
+            length: int("byteLength", None)?,
+            stride: int("byteStride", None)?,
+            count: int("count", None)?,
+            mode: ext.get("mode").and_then(Value::as_str).unwrap_or(""),
+            filter: ext.get("filter").and_then(Value::as_str).unwrap_or("NONE"),
+        })
+    }
+
+    /// Decodes `src` into `size` (= count × stride) bytes, filter applied.
+    fn decode(&self, src: &[u8], size: usize) -> Result<Vec<u8>, String> {
+        let (count, stride, mode) = (self.count, self.stride, self.mode);
+        // u32 words: the filters work on aligned 16- and 32-bit components
+        let mut dst = vec![0u32; size.div_ceil(4)];
+        let out = dst.as_mut_ptr().cast::<std::ffi::c_void>();
+        let code = match mode {
+            "ATTRIBUTES" => {
+                if stride == 0 || stride % 4 != 0 || stride > 256 {
+                    return Err(format!(
+                        "byteStride {stride} (ATTRIBUTES: 4..=256, a multiple of 4)"
+                    ));
+                }
+                // SAFETY: `dst` holds count × stride bytes, `src` its length.
+                unsafe {
+                    meshopt::ffi::meshopt_decodeVertexBuffer(
+                        out,
+                        count,
+                        stride,
+                        src.as_ptr(),
+                        src.len(),
+                    )
+                }
+            }
+            "TRIANGLES" | "INDICES" => {
+                if stride != 2 && stride != 4 {
+                    return Err(format!("byteStride {stride} ({mode}: 2 or 4)"));
+                }
+                if mode == "TRIANGLES" && count % 3 != 0 {
+                    return Err(format!("count {count} is not a multiple of 3"));
+                }
+                let decode = if mode == "TRIANGLES" {
+                    meshopt::ffi::meshopt_decodeIndexBuffer
+                } else {
+                    meshopt::ffi::meshopt_decodeIndexSequence
+                };
+                // SAFETY: as above, index size `stride`.
+                unsafe { decode(out, count, stride, src.as_ptr(), src.len()) }
+            }
+            other => return Err(format!("unknown mode {other:?}")),
+        };
+        if code != 0 {
+            return Err(format!("meshoptimizer could not decode it (error {code})"));
+        }
+        self.filter(&mut dst)?;
+        let mut bytes: Vec<u8> = dst.iter().flat_map(|w| w.to_ne_bytes()).collect();
+        bytes.truncate(size);
+        Ok(bytes)
+    }
+
+    /// Applies the view's filter to the decoded words in place.
+    fn filter(&self, dst: &mut [u32]) -> Result<(), String> {
+        let (count, stride, filter) = (self.count, self.stride, self.filter);
+        if self.mode != "ATTRIBUTES" {
+            return match filter {
+                "NONE" => Ok(()),
+                _ => Err(format!("filter {filter} on {}", self.mode)),
+            };
+        }
+        let ok = match filter {
+            "NONE" => true,
+            "OCTAHEDRAL" | "COLOR" => stride == 4 || stride == 8,
+            "QUATERNION" => stride == 8,
+            "EXPONENTIAL" => true,
+            _ => return Err(format!("unknown filter {filter:?}")),
+        };
+        if !ok {
+            return Err(format!("filter {filter} with byteStride {stride}"));
+        }
+        debug_assert!(dst.len() * 4 >= count * stride);
+        let out = dst.as_mut_ptr().cast::<std::ffi::c_void>();
+        // SAFETY: `dst` is u32-aligned and holds count × stride bytes.
+        unsafe {
+            match filter {
+                "OCTAHEDRAL" => meshopt::ffi::meshopt_decodeFilterOct(out, count, stride),
+                "COLOR" => meshopt::ffi::meshopt_decodeFilterColor(out, count, stride),
+                "QUATERNION" => meshopt::ffi::meshopt_decodeFilterQuat(out, count, stride),
+                "EXPONENTIAL" => meshopt::ffi::meshopt_decodeFilterExp(out, count, stride),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
 }

@@ -25,7 +25,7 @@ mod obj;
 mod ply;
 mod smf;
 
-pub use gltf_in::read_gltf;
+pub use gltf_in::{read_gltf, read_gltf_with};
 pub use obj::{read_obj, read_obj_with_materials};
 pub use ply::read_ply;
 pub use smf::read_smf;
@@ -34,6 +34,18 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::scene::{Primitive, Scene};
+
+/// The memory cap of the readers: decoded data allocated from counts a
+/// file declares (glTF accessors, `EXT_meshopt_compression` views) may take
+/// at most this many bytes per byte of input (the file and its buffers),
+/// plus [`DECODED_BYTES_FLOOR`]. Every count is checked against the bytes
+/// that hold its data and against this cap *before* anything is allocated,
+/// so a lying count fails at once with an error naming it. The PLY reader
+/// sizes its arrays by the file's length.
+pub const DECODED_BYTES_PER_INPUT_BYTE: u64 = 64;
+
+/// The part of the memory cap every file gets whatever its size (64 MiB).
+pub const DECODED_BYTES_FLOOR: u64 = 64 << 20;
 
 /// Where in the input a [`ReadError`] happened.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -169,15 +181,29 @@ pub fn detect_format(path: &Path, bytes: &[u8]) -> Option<Format> {
     }
 }
 
+/// How to read.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// A part of the file that would be left out with a warning (a glTF
+    /// primitive that cannot be read, points and lines, a mesh with no
+    /// triangle) is an error instead (`--strict`).
+    pub strict: bool,
+}
+
 /// Reads any supported mesh file. See the module documentation.
 pub fn read_scene(path: &Path) -> Result<Scene, ReadError> {
+    read_scene_with(path, &ReadOptions::default())
+}
+
+/// [`read_scene`] with options.
+pub fn read_scene_with(path: &Path, opts: &ReadOptions) -> Result<Scene, ReadError> {
     let bytes = std::fs::read(path)
         .map_err(|e| ReadError::new(path, Location::File, ErrorKind::Io).with_source(e))?;
     match detect_format(path, &bytes) {
         Some(Format::Obj) => read_obj(&bytes, path),
         Some(Format::Ply) => read_ply(&bytes, path),
         Some(Format::Smf) => read_smf(&bytes, path),
-        Some(Format::Gltf) => read_gltf(&bytes, path),
+        Some(Format::Gltf) => read_gltf_with(&bytes, path, opts),
         None => Err(ReadError::new(
             path,
             Location::File,
@@ -299,6 +325,15 @@ fn compact(p: Primitive) -> Primitive {
         extra_colors: p.extra_colors.iter().map(|c| pick(c, &order)).collect(),
         extra_joints: p.extra_joints.iter().map(|j| pick(j, &order)).collect(),
         extra_weights: p.extra_weights.iter().map(|w| pick(w, &order)).collect(),
+        targets: p
+            .targets
+            .iter()
+            .map(|t| crate::scene::MorphTarget {
+                positions: t.positions.as_deref().map(|v| pick(v, &order)),
+                normals: t.normals.as_deref().map(|v| pick(v, &order)),
+                tangents: t.tangents.as_deref().map(|v| pick(v, &order)),
+            })
+            .collect(),
         indices,
     }
 }

@@ -395,6 +395,7 @@ impl<'a> Builder<'a> {
             meshes,
             materials,
             origin: Origin::Flat,
+            warnings: Vec::new(),
         }
     }
 }

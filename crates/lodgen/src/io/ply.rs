@@ -259,6 +259,7 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         }],
         materials: Vec::new(),
         origin: Origin::Flat,
+        warnings: Vec::new(),
     };
     check_not_empty(&scene, path)?;
     Ok(scene)
