@@ -1,0 +1,221 @@
+//! The build driver: per mesh, flatten → simplify (QEM on wedges, or a
+//! curvature-adaptive method) → select the levels → per level measure, fit
+//! and extract → screen coverages. [`MeshBuild`] is what comes out.
+
+use std::time::Instant;
+
+use lodgen_pm::metric::{ErrorReport, MeasureOptions};
+use lodgen_pm::{levels, simplify_adaptive, MeshError, Method, Simplified, SimplifyOptions};
+
+use crate::scene::{LodLevel, LodMesh, Scene, SourceMesh};
+
+use super::error::BuildError;
+use super::extract::extract;
+use super::fit::FitSource;
+use super::flat::{flatten, Flat};
+use super::measure::Measurer;
+use super::options::{BuildOptions, LevelRequest, Progress};
+use super::select::select_splits;
+use super::wedges::simplify_wedged;
+
+/// What happened to one mesh, beside its [`LodMesh`].
+#[derive(Clone, Debug)]
+pub struct MeshBuild {
+    pub lod: LodMesh,
+    /// The simplification (progressive mesh, stats, stop reason).
+    pub simplified: Simplified,
+    /// Split count of each level, finest first.
+    pub level_splits: Vec<usize>,
+    /// Measured error of each level against the welded input, finest first.
+    pub errors: Vec<ErrorReport>,
+    /// False when `errors` are the quadric's estimates (`--measure off`):
+    /// their maxima are the recorded contraction errors, mean and RMS NaN.
+    pub measured: bool,
+    /// Wall time of the simplification (preparation included) and of the
+    /// error measurement (the original's hierarchy included).
+    pub times: BuildTimes,
+    /// What the user should know about this chain, in words (levels raised
+    /// to the triangle floor, requested levels that coincide); printed under
+    /// the mesh's table and in the report.
+    pub notes: Vec<String>,
+}
+
+/// Where a mesh's build time went (wall clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BuildTimes {
+    /// Weld, clean and simplify (the core's phases and its preparation).
+    pub simplify: std::time::Duration,
+    /// Measure every level against the original (and search levels by error).
+    pub measure: std::time::Duration,
+    /// The whole build of this mesh: the above plus flattening, level
+    /// extraction and attribute fitting.
+    pub total: std::time::Duration,
+}
+
+/// Build the LOD chain of every mesh of `scene`.
+pub fn build_lods(
+    scene: &Scene,
+    opts: &BuildOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Vec<MeshBuild>, BuildError> {
+    let n = scene.meshes.len();
+    scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            progress(Progress::Simplifying { mesh: i, of: n });
+            build_one(i, m, opts, progress)
+        })
+        .collect()
+}
+/// Build the LOD chain of one mesh.
+pub fn build_one(
+    index: usize,
+    mesh: &SourceMesh,
+    opts: &BuildOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<MeshBuild, BuildError> {
+    let flat = flatten(mesh);
+    let mesh_err = |source| BuildError::Mesh {
+        index,
+        name: mesh.name.clone(),
+        source,
+    };
+    let sopts = simplify_options(opts, flat.indices.len() / 3)?;
+    let t_build = Instant::now();
+    let simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
+    let simplify_time = t_build.elapsed();
+    let pm = &simplified.pm;
+    let full = pm.mesh_at_splits(pm.len());
+    let measurer = Measurer::new(pm, &full, opts.measured, index, &mesh.name)?;
+    let mut measuring = |level: usize, of: usize| {
+        progress(Progress::Measuring {
+            mesh: index,
+            level,
+            of,
+        })
+    };
+    let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
+    let (lod_levels, errors) = build_levels(
+        mesh,
+        &flat,
+        &simplified,
+        &splits,
+        &opts.measure,
+        &measurer,
+        &mut measuring,
+    )?;
+    let measure_time = measurer.time();
+    drop(measurer);
+    Ok(MeshBuild {
+        lod: LodMesh {
+            source: index,
+            name: mesh.name.clone(),
+            levels: lod_levels,
+        },
+        simplified,
+        level_splits: splits,
+        errors,
+        measured: opts.measured,
+        times: BuildTimes {
+            simplify: simplify_time,
+            measure: measure_time,
+            total: t_build.elapsed(),
+        },
+        notes,
+    })
+}
+
+/// `opts.simplify` with the triangle target the requested levels need.
+fn simplify_options(opts: &BuildOptions, full_tris: usize) -> Result<SimplifyOptions, BuildError> {
+    let mut sopts = opts.simplify;
+    match &opts.levels {
+        LevelRequest::Specs(specs) => {
+            if specs.is_empty() {
+                return Err(BuildError::NoLevels);
+            }
+            // Ratios refer to the welded, cleaned mesh; a bound on the raw
+            // count is only a lower bound of what is needed, so run to the
+            // smallest requested ratio / count of the input.
+            let target = levels::triangle_target(full_tris, specs).unwrap_or(0);
+            sopts.target_triangles = Some(target.max(opts.min_triangles.max(1)));
+            sopts.target_ratio = None;
+        }
+        LevelRequest::MaxErrors(bounds) => {
+            if bounds.is_empty() {
+                return Err(BuildError::NoLevels);
+            }
+            sopts.target_triangles = Some(opts.min_triangles.max(1));
+            sopts.target_ratio = None;
+        }
+    }
+    Ok(sopts)
+}
+
+/// QEM runs on wedges (seams and attributes kept); the curvature-adaptive
+/// methods see positions only, and their levels take attributes from the
+/// first input vertex of each position.
+fn simplify(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    opts: &BuildOptions,
+    sopts: &SimplifyOptions,
+) -> Result<Simplified, MeshError> {
+    if opts.method == Method::Qem {
+        simplify_wedged(mesh, flat, sopts, &opts.attribute_weights)
+    } else {
+        simplify_adaptive(
+            &flat.positions,
+            &flat.indices,
+            opts.method,
+            sopts,
+            &opts.adaptive,
+        )
+    }
+}
+
+/// Every level at `splits`: measured, attributes fitted below the input
+/// (module docs), extracted into primitives; then the screen coverages
+/// from the measured errors.
+fn build_levels(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    simplified: &Simplified,
+    splits: &[usize],
+    mopts: &MeasureOptions,
+    measurer: &Measurer<'_>,
+    measuring: &mut dyn FnMut(usize, usize),
+) -> Result<(Vec<LodLevel>, Vec<ErrorReport>), BuildError> {
+    let pm = &simplified.pm;
+    let diagonal = measurer.diagonal();
+    let mut errors = Vec::with_capacity(splits.len());
+    let mut lod_levels = Vec::with_capacity(splits.len());
+    let mut cursor = pm.cursor();
+    let fit_source = FitSource::new(mesh, flat, simplified);
+    for (li, &k) in splits.iter().enumerate() {
+        measuring(li, splits.len());
+        cursor.seek(k);
+        let m = cursor.mesh();
+        let report = measurer.measure(m, k, mopts)?;
+        // a level below the input gets fitted values (module docs)
+        let fitted = match (&fit_source, cursor.wedges()) {
+            (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
+            _ => None,
+        };
+        lod_levels.push(LodLevel {
+            primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
+            hausdorff: report.hausdorff() / diagonal.max(f64::MIN_POSITIVE),
+            rms: report.rms() / diagonal.max(f64::MIN_POSITIVE),
+            screen_coverage: 0.0,
+        });
+        errors.push(report);
+    }
+    let coverages = crate::coverage::screen_coverages(
+        &lod_levels.iter().map(|l| l.hausdorff).collect::<Vec<_>>(),
+    );
+    for (l, c) in lod_levels.iter_mut().zip(&coverages) {
+        l.screen_coverage = *c;
+    }
+    Ok((lod_levels, errors))
+}

@@ -1,0 +1,121 @@
+//! What to build: [`BuildOptions`] (levels, method, measurement, attribute
+//! weights, triangle floor) and the [`Progress`] events a build reports.
+
+use lodgen_pm::levels::LevelSpec;
+use lodgen_pm::metric::MeasureOptions;
+use lodgen_pm::{AdaptiveOptions, Method, SimplifyOptions};
+
+/// Which levels to build.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LevelRequest {
+    /// Ratios and/or triangle counts.
+    Specs(Vec<LevelSpec>),
+    /// Measured symmetric Hausdorff bounds, as fractions of the bounding-box
+    /// diagonal: each level is the coarsest whose measured error stays
+    /// within its bound.
+    MaxErrors(Vec<f64>),
+}
+
+/// Options of [`build_lods`].
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    pub levels: LevelRequest,
+    pub simplify: SimplifyOptions,
+    /// QEM (default) or one of the curvature-adaptive methods of seed 001.
+    pub method: Method,
+    /// Options of the curvature-adaptive methods.
+    pub adaptive: AdaptiveOptions,
+    pub measure: MeasureOptions,
+    /// Measure each level's error (default). When false, a level's error is
+    /// the quadric's estimate (the largest recorded contraction error still
+    /// in it; RMS unknown) and `MeshBuild::measured` says so.
+    pub measured: bool,
+    /// Weights of the attribute term of the cost (`lodgen_pm::simplify::features`).
+    pub attribute_weights: AttributeWeights,
+    /// Floor per mesh: no level has fewer triangles than this (nor fewer
+    /// than 1), so a mesh with at most this many is written unsimplified.
+    /// Default value: [`DEFAULT_MIN_TRIANGLES`].
+    pub min_triangles: usize,
+}
+
+/// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
+/// billboards (2–8 triangles) are kept as they are: any contraction of such a
+/// part moves its outline by the part's own size, and a level of 1–7
+/// triangles saves nothing a draw call would notice. A box (12) or more is
+/// simplified down to 8 at most.
+pub const DEFAULT_MIN_TRIANGLES: usize = 8;
+
+/// Weights of each attribute in the cost (Hoppe 1999 attribute quadrics,
+/// `lodgen_pm::simplify::features`): a difference of 1 in an attribute at weight 1
+/// costs like a displacement by the bounding-box diagonal. 0 leaves an
+/// attribute out (its seams are still kept).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttributeWeights {
+    /// Unit normals (a difference of 2 is opposite). Default value: 0.05.
+    pub normal: f32,
+    /// Every `TEXCOORD_n` set. Default value: 0.5.
+    pub uv: f32,
+    /// Every `COLOR_n` set, RGBA. Default value: 0.5.
+    pub color: f32,
+}
+
+impl AttributeWeights {
+    /// What measured best on spot.obj (`cargo xtask attributes`, smooth
+    /// normals, pass schedule): 0.05 / 0.5 is the pair that beats
+    /// meshoptimizer's `simplify_with_attributes` on mean and RMS UV and
+    /// normal error at 50 %, 10 % and 2 % (0.05 / 0.25, best under the
+    /// greedy schedule, is 0.4° behind on the mean normal at 2 %), and keeps
+    /// the geometric Hausdorff error below meshoptimizer's too. Colour is not
+    /// measured (no test mesh has colours); it gets the UV weight, being
+    /// in the same [0, 1] range.
+    pub const DEFAULT: AttributeWeights = AttributeWeights {
+        normal: 0.05,
+        uv: 0.5,
+        color: 0.5,
+    };
+}
+
+impl Default for AttributeWeights {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            levels: LevelRequest::Specs(vec![
+                LevelSpec::Ratio(0.5),
+                LevelSpec::Ratio(0.1),
+                LevelSpec::Ratio(0.02),
+            ]),
+            simplify: SimplifyOptions::DEFAULT,
+            method: Method::Qem,
+            adaptive: AdaptiveOptions::DEFAULT,
+            measure: MeasureOptions::DEFAULT,
+            measured: true,
+            attribute_weights: AttributeWeights::DEFAULT,
+            min_triangles: DEFAULT_MIN_TRIANGLES,
+        }
+    }
+}
+
+/// Progress events, for a progress bar (the builder never prints). In
+/// order: `Reading`, then per mesh `Simplifying` and one `Measuring` per
+/// level, then `Writing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    /// Parsing the input file (sent by [`crate::cli::build_file`]).
+    Reading,
+    /// Writing the output file (sent by [`crate::cli::build_file`]).
+    Writing,
+    Simplifying {
+        mesh: usize,
+        of: usize,
+    },
+    Measuring {
+        mesh: usize,
+        level: usize,
+        of: usize,
+    },
+}

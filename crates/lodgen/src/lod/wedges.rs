@@ -1,0 +1,150 @@
+//! Wedges and the attribute term of the cost: which flat vertices are one
+//! wedge (same primitive, position and attribute bits), the weighted
+//! attribute vector per flat vertex, and QEM run on wedges.
+
+use lodgen_pm::{simplify_with_wedges, MeshError, Simplified, SimplifyOptions};
+
+use crate::scene::{Primitive, SourceMesh};
+
+use super::flat::{flatten, locate, Flat};
+use super::options::AttributeWeights;
+use super::unit::normalize3;
+
+/// Bit pattern of every attribute of a flat vertex: equal keys, one wedge.
+fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
+    let p = &mesh.primitives[prim];
+    let mut k = vec![prim as u32];
+    let mut put = |xs: &[f32]| k.extend(xs.iter().map(|x| if *x == 0.0 { 0 } else { x.to_bits() }));
+    put(&p.positions[v]);
+    if let Some(a) = &p.normals {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.texcoords {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.tangents {
+        put(&a[v]);
+    }
+    for a in &p.extra_texcoords {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.colors {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.weights {
+        put(&a[v]);
+    }
+    for a in &p.extra_colors {
+        put(&a[v]);
+    }
+    for a in &p.extra_weights {
+        put(&a[v]);
+    }
+    if let Some(a) = &p.joints {
+        k.extend(a[v].map(u32::from));
+    }
+    for a in &p.extra_joints {
+        k.extend(a[v].map(u32::from));
+    }
+    k
+}
+
+/// The weighted attribute vector of every flat vertex for the cost, and its
+/// length: normal, every UV set, every colour set, each present when some
+/// primitive has it and its weight is not 0 (vertices of primitives without
+/// it get zeros, white for colours). Tangents follow the UV charts and are
+/// not priced; joints and weights are never interpolated.
+fn weighted_attributes(mesh: &SourceMesh, flat: &Flat, w: &AttributeWeights) -> (Vec<f32>, usize) {
+    let any = |f: &dyn Fn(&Primitive) -> bool| mesh.primitives.iter().any(f);
+    let most = |f: &dyn Fn(&Primitive) -> usize| mesh.primitives.iter().map(f).max().unwrap_or(0);
+    let normal = w.normal != 0.0 && any(&|p| p.normals.is_some());
+    // every UV set under the `uv` weight, every colour set under `color`
+    let uv = w.uv != 0.0 && any(&|p| p.texcoords.is_some());
+    let extra_uv = if w.uv != 0.0 {
+        most(&|p| p.extra_texcoords.len())
+    } else {
+        0
+    };
+    let color = w.color != 0.0 && any(&|p| p.colors.is_some());
+    let extra_color = if w.color != 0.0 {
+        most(&|p| p.extra_colors.len())
+    } else {
+        0
+    };
+    let dims = 3 * usize::from(normal)
+        + 2 * (usize::from(uv) + extra_uv)
+        + 4 * (usize::from(color) + extra_color);
+    let mut out = Vec::with_capacity(dims * flat.positions.len());
+    if dims == 0 {
+        return (out, 0);
+    }
+    for p in &mesh.primitives {
+        for v in 0..p.positions.len() {
+            if normal {
+                let n = p.normals.as_ref().map_or([0.0; 3], |a| normalize3(a[v]));
+                out.extend(n.map(|x| x * w.normal));
+            }
+            if uv {
+                let t = p.texcoords.as_ref().map_or([0.0; 2], |a| a[v]);
+                out.extend(t.map(|x| x * w.uv));
+            }
+            for k in 0..extra_uv {
+                let t = p.extra_texcoords.get(k).map_or([0.0; 2], |a| a[v]);
+                out.extend(t.map(|x| x * w.uv));
+            }
+            if color {
+                let c = p.colors.as_ref().map_or([1.0; 4], |a| a[v]);
+                out.extend(c.map(|x| x * w.color));
+            }
+            for k in 0..extra_color {
+                let c = p.extra_colors.get(k).map_or([1.0; 4], |a| a[v]);
+                out.extend(c.map(|x| x * w.color));
+            }
+        }
+    }
+    (out, dims)
+}
+
+/// Flat vertex → its wedge's representative (the lowest flat vertex with
+/// the same primitive, position and attributes), so duplicated vertices
+/// with identical attributes do not make false seams.
+pub(super) fn wedge_of_vertex(mesh: &SourceMesh, flat: &Flat) -> Vec<u32> {
+    let n = flat.positions.len();
+    let mut keys: Vec<(Vec<u32>, u32)> = (0..n as u32)
+        .map(|v| {
+            let (p, local) = locate(flat, v);
+            (wedge_key(mesh, p, local), v)
+        })
+        .collect();
+    keys.sort_unstable();
+    let mut out = vec![0; n];
+    for run in keys.chunk_by(|a, b| a.0 == b.0) {
+        for k in run {
+            out[k.1 as usize] = run[0].1;
+        }
+    }
+    out
+}
+
+/// QEM on `mesh`'s wedges: topology on welded positions, every primitive
+/// and attribute seam kept, attribute quadrics weighted by `weights`. The
+/// log's wedge ids are flat vertex ids (see [`stream_attributes`]).
+pub fn simplify_mesh(
+    mesh: &SourceMesh,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+) -> Result<Simplified, MeshError> {
+    simplify_wedged(mesh, &flatten(mesh), opts, weights)
+}
+
+pub(super) fn simplify_wedged(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+) -> Result<Simplified, MeshError> {
+    let wedge = wedge_of_vertex(mesh, flat);
+    let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
+    let (values, dims) = weighted_attributes(mesh, flat, weights);
+    simplify_with_wedges(&flat.positions, &wedged, &values, dims, opts)
+}
