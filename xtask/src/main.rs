@@ -9,6 +9,7 @@ mod draco;
 mod e2e;
 mod fuzz;
 mod golden;
+mod layout;
 mod render;
 mod test;
 
@@ -26,6 +27,8 @@ tasks:
   compare [--meshes bunny,cow,fandisk] [--no-render]
                           every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
 
+  layout                  files ≤ 800 lines, functions ≤ 120 lines outside tests, no module cycles
+                          (crates/*/src, xtask/src)
   attributes [--half-edge] [--attribute-weights=LIST]
                           UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
 
@@ -44,6 +47,7 @@ fn main() -> anyhow::Result<()> {
         "attributes" => attributes::run(rest),
         "bench-child" => bench::child(rest),
         "compare" => compare::run(rest),
+        "layout" => layout::run(rest),
         "help" | "-h" | "--help" => {
             println!("{USAGE}");
             Ok(())
