@@ -395,11 +395,14 @@ impl TriangleBvh {
         let scale = p.iter().fold(self.magnitude, |m, &x| max64(m, x.abs()));
         let slack = SLACK * scale;
         let mut bound = skip_bound(best.0, slack);
-        let mut stack = [(0u32, 0.0f32); STACK];
+        // (uninitialised: zeroing its 2 KB per query was 2 % of a measurement's profile)
+        let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; STACK];
+        stack[0].write((0, 0.0));
         let mut len = 1;
         while len > 0 {
             len -= 1;
-            let (ni, nd2) = stack[len];
+            // SAFETY: entries below `len` were written.
+            let (ni, nd2) = unsafe { stack[len].assume_init() };
             if nd2 > bound {
                 continue;
             }
@@ -426,7 +429,7 @@ impl TriangleBvh {
             for &c in order[..n].iter().rev() {
                 if node.count[c] == 0 {
                     debug_assert!(len < STACK, "tree deeper than MAX_SAH_DEPTH allows");
-                    stack[len] = (node.first[c], d[c]);
+                    stack[len].write((node.first[c], d[c]));
                     len += 1;
                 }
             }
