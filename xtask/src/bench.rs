@@ -133,7 +133,10 @@ fn meshopt_once(m: &Mesh, indices: &[u32]) -> Result<(f64, Vec<f64>, Vec<Mesh>)>
 
 pub fn child(args: &[String]) -> Result<()> {
     if let Some((tool, rest)) = args.split_first() {
-        if matches!(tool.as_str(), "meshopt-e2e" | "meshopt-errors" | "e2e-run") {
+        if matches!(
+            tool.as_str(),
+            "meshopt-e2e" | "meshopt-errors" | "e2e-run" | "mesh"
+        ) {
             return crate::e2e::child(tool, rest);
         }
     }

@@ -109,6 +109,7 @@ fn meshopt_levels(m: &Mesh) -> Result<Vec<Vec<u32>>> {
 /// `xtask bench-child meshopt-errors IN`: its 2 % level's errors (JSON).
 /// `xtask bench-child e2e-run CMD ARGS…`: runs CMD, prints its wall time and
 /// peak memory (JSON).
+/// `xtask bench-child mesh ID`: makes the bench mesh `ID` if needed, prints its path.
 pub fn child(tool: &str, args: &[String]) -> Result<()> {
     match (tool, args) {
         ("meshopt-e2e", [input, output]) => {
@@ -142,6 +143,10 @@ pub fn child(tool: &str, args: &[String]) -> Result<()> {
             );
             Ok(())
         }
+        ("mesh", [id]) => {
+            println!("{}", mesh_file(id)?.display());
+            Ok(())
+        }
         ("e2e-run", [cmd, rest @ ..]) => {
             let t = Instant::now();
             let status = Command::new(cmd).args(rest).status()?;
@@ -161,7 +166,7 @@ pub fn child(tool: &str, args: &[String]) -> Result<()> {
             Ok(())
         }
         _ => bail!(
-            "usage: xtask bench-child meshopt-e2e IN OUT | meshopt-errors IN | e2e-run CMD ARGS…"
+            "usage: xtask bench-child meshopt-e2e IN OUT | meshopt-errors IN | mesh ID | e2e-run CMD ARGS…"
         ),
     }
 }

@@ -239,11 +239,7 @@ impl TriangleBvh {
                 let mut b = Aabb::EMPTY;
                 t.iter()
                     .for_each(|&v| b.grow_point(mesh.positions[v as usize]));
-                Item {
-                    c: std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k]),
-                    b,
-                    id: id as u32,
-                }
+                Item { b, id: id as u32 }
             })
             .collect();
         let blank = BuildNode {
@@ -266,7 +262,7 @@ impl TriangleBvh {
                 let mut cb = Aabb::EMPTY;
                 for it in slots.iter() {
                     bb.grow(&it.b);
-                    cb.grow_point(it.c);
+                    cb.grow_point(it.centroid());
                 }
                 nodes[ni].min = bb.min;
                 nodes[ni].max = bb.max;
@@ -290,12 +286,22 @@ impl TriangleBvh {
                 work.push((left, first, mid, depth + 1));
             }
         }
-        let tris = items
+        // Free the build's scratch before the triangles are copied out: the 4-wide nodes,
+        // then the ids, then the corners (peak ≈ 70 instead of 120 bytes per triangle).
+        let root = nodes.first().copied();
+        let query_nodes = if nodes.is_empty() {
+            Vec::new()
+        } else {
+            collapse(&nodes)
+        };
+        drop(nodes);
+        let ids: Vec<u32> = items.iter().map(|it| it.id).collect();
+        drop(items);
+        let tris = ids
             .iter()
-            .map(|it| mesh.triangles[it.id as usize].map(|v| mesh.positions[v as usize]))
+            .map(|&id| mesh.triangles[id as usize].map(|v| mesh.positions[v as usize]))
             .collect();
-        let ids = items.iter().map(|it| it.id).collect();
-        let Some(root) = nodes.first() else {
+        let Some(root) = root else {
             return TriangleBvh {
                 root_lo: [0.0; 3],
                 root_hi: [0.0; 3],
@@ -318,7 +324,7 @@ impl TriangleBvh {
                 .fold(0.0, |m, &x| max64(m, f64::from(x).abs())),
             root_first: if root.count > 0 { root.first } else { 0 },
             root_count: root.count,
-            nodes: collapse(&nodes),
+            nodes: query_nodes,
             depth: max_depth,
             tris,
             ids,
@@ -520,15 +526,29 @@ fn collapse(build: &[BuildNode]) -> Vec<Node> {
         }
         nodes[ni] = node;
     }
+    nodes.shrink_to_fit();
     nodes
 }
 
-/// A triangle during the build.
+/// A triangle during the build: its box and index (the centroid is the box's centre, computed
+/// when needed: 28 bytes instead of 40 per triangle at the build's peak).
 #[derive(Clone, Copy, Debug)]
 struct Item {
     b: Aabb,
-    c: [f32; 3],
     id: u32,
+}
+
+impl Item {
+    /// Centre of the box along `axis`.
+    #[inline(always)]
+    fn centre(&self, axis: usize) -> f32 {
+        0.5 * self.b.min[axis] + 0.5 * self.b.max[axis]
+    }
+
+    #[inline(always)]
+    fn centroid(&self) -> [f32; 3] {
+        std::array::from_fn(|k| self.centre(k))
+    }
 }
 
 /// Splits `slots` in place into a left and right part and returns the size of the left part
@@ -550,7 +570,7 @@ fn split(slots: &mut [Item], cb: &Aabb) -> usize {
         let mut bin_box = [Aabb::EMPTY; BINS];
         let mut bin_n = [0usize; BINS];
         for it in slots.iter() {
-            let b = bin_of(it.c[axis], lo, scale);
+            let b = bin_of(it.centre(axis), lo, scale);
             bin_box[b].grow(&it.b);
             bin_n[b] += 1;
         }
@@ -580,7 +600,7 @@ fn split(slots: &mut [Item], cb: &Aabb) -> usize {
             }
         }
         if let Some((_, boundary)) = best {
-            let mid = partition(slots, |it| bin_of(it.c[axis], lo, scale) < boundary);
+            let mid = partition(slots, |it| bin_of(it.centre(axis), lo, scale) < boundary);
             if 0 < mid && mid < count {
                 return mid;
             }
@@ -601,7 +621,7 @@ fn median_split(slots: &mut [Item], cb: &Aabb) -> usize {
         .unwrap_or(0);
     let mid = slots.len() / 2;
     slots.select_nth_unstable_by(mid, |x, y| {
-        x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id))
+        x.centre(axis).total_cmp(&y.centre(axis)).then(x.id.cmp(&y.id))
     });
     mid
 }
