@@ -378,13 +378,15 @@ impl TriangleBvh {
         let mut best = (f64::INFINITY, 0u32, [f64::NAN; 3]);
         if let Some(h) = hint {
             debug_assert!((h as usize) < self.tris.len());
-            self.test_leaf(p, h, 1, &mut best);
+            self.test_leaf(p, h, 1, u32::MAX, &mut best);
         }
+        // (the hint's leaf skips it: measured once)
+        let skip = hint.unwrap_or(u32::MAX);
         if box_distance_squared(self.root_lo, self.root_hi, p) < best.0 {
             if self.root_count > 0 {
-                self.test_leaf(p, self.root_first, self.root_count, &mut best);
+                self.test_leaf(p, self.root_first, self.root_count, skip, &mut best);
             } else {
-                self.search(p, &mut best);
+                self.search(p, skip, &mut best);
             }
         }
         debug_assert!(
@@ -396,7 +398,7 @@ impl TriangleBvh {
 
     /// Depth-first branch and bound from internal node 0, nearer children first.
     #[inline]
-    fn search(&self, p: [f64; 3], best: &mut (f64, u32, [f64; 3])) {
+    fn search(&self, p: [f64; 3], skip: u32, best: &mut (f64, u32, [f64; 3])) {
         let p32 = p.map(|x| x as f32);
         let scale = p.iter().fold(self.magnitude, |m, &x| max64(m, x.abs()));
         let slack = SLACK * scale;
@@ -443,7 +445,7 @@ impl TriangleBvh {
                 let count = node.count[c];
                 if count > 0 && d[c] <= bound {
                     let before = best.0;
-                    self.test_leaf(p, node.first[c], u32::from(count), best);
+                    self.test_leaf(p, node.first[c], u32::from(count), skip, best);
                     if best.0 < before {
                         bound = skip_bound(best.0, slack);
                     }
@@ -452,10 +454,20 @@ impl TriangleBvh {
         }
     }
 
-    /// Measures slots `first..first + count`, keeping the closest in `best`.
+    /// Measures slots `first..first + count` except `skip`, keeping the closest in `best`.
     #[inline(always)]
-    fn test_leaf(&self, p: [f64; 3], first: u32, count: u32, best: &mut (f64, u32, [f64; 3])) {
+    fn test_leaf(
+        &self,
+        p: [f64; 3],
+        first: u32,
+        count: u32,
+        skip: u32,
+        best: &mut (f64, u32, [f64; 3]),
+    ) {
         for slot in first..first + count {
+            if slot == skip {
+                continue;
+            }
             let [a, b, c] = self.tris[slot as usize].map(widen);
             let q = closest_point_on_triangle(p, a, b, c);
             let d2 = distance_squared(p, q);
@@ -621,7 +633,9 @@ fn median_split(slots: &mut [Item], cb: &Aabb) -> usize {
         .unwrap_or(0);
     let mid = slots.len() / 2;
     slots.select_nth_unstable_by(mid, |x, y| {
-        x.centre(axis).total_cmp(&y.centre(axis)).then(x.id.cmp(&y.id))
+        x.centre(axis)
+            .total_cmp(&y.centre(axis))
+            .then(x.id.cmp(&y.id))
     });
     mid
 }
