@@ -52,7 +52,8 @@ pub use progressive::{attrfit, levels, stream};
 pub use progressive::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 pub use simplify::{
     Boundary, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier, SimplifyOptions,
-    Snapshot, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT, DEFAULT_PASS_FACTOR,
+    Snapshot, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES,
+    DEFAULT_PASS_FACTOR,
 };
 
 /// A simplification's result: the progressive mesh (numbered as in

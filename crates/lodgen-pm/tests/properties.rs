@@ -255,3 +255,79 @@ fn cow_simplifies_cleanly_and_replays_exactly() {
         assert_eq!(out.pm.full_in_input_order(), welded.mesh);
     }
 }
+
+/// A partitioned run (clusters of `size` triangles) on pools of 1, 2 and 4
+/// threads: the three progressive meshes must be the same, and the run's
+/// own final state the base mesh of its log.
+fn partitioned(m: &Mesh, opts: &SimplifyOptions, size: usize) -> ProgressiveMesh {
+    let opts = opts.with_partition(Some(size));
+    let mut outs = [1, 2, 4].map(|threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut s = Simplifier::new(m, &opts).unwrap();
+            s.run();
+            let snap = s.snapshot();
+            let (pm, stats) = s.finish();
+            assert_eq!(stats.collapses, pm.len());
+            // the simplifier's state after the run is the log's base mesh
+            let mut mapped: Vec<(u32, [u32; 3])> = pm
+                .base
+                .triangles
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    (
+                        pm.triangle_origin[i],
+                        t.map(|v| pm.vertex_origin[v as usize]),
+                    )
+                })
+                .collect();
+            mapped.sort_unstable();
+            assert_eq!(mapped, snap.triangles);
+            for (i, p) in pm.base.positions.iter().enumerate() {
+                assert_eq!(*p, snap.positions[pm.vertex_origin[i] as usize]);
+            }
+            pm
+        })
+    });
+    assert_eq!(outs[0], outs[1], "1 vs 2 threads");
+    assert_eq!(outs[0], outs[2], "1 vs 4 threads");
+    std::mem::take(&mut outs[0])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// Partitioned runs (clusters simplified in parallel, then the whole
+    /// mesh) keep every invariant: clean levels, exact replay, the same
+    /// log for any thread count.
+    #[test]
+    fn partitioned_runs_keep_every_invariant(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.5, size in 10usize..60) {
+        let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+        let pm = partitioned(&m, &opts, size);
+        check_levels(&pm, true);
+        prop_assert_eq!(pm.full_in_input_order(), m);
+    }
+}
+
+#[test]
+fn partitioned_cow_replays_exactly_and_differs_from_the_whole_mesh_walk() {
+    let Some(text) = common::shared_asset_text("cow.obj") else {
+        return;
+    };
+    let (p, idx) = common::read_obj(&text);
+    let m = prepare(&p, &idx).unwrap().mesh;
+    for ratio in [0.5, 0.02] {
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+        let pm = partitioned(&m, &opts, 500);
+        check_levels(&pm, true);
+        assert_eq!(pm.full_in_input_order(), m);
+        // (the clusters really were simplified on their own)
+        let whole = simplify(&p, &idx, &opts.with_partition(None)).unwrap().pm;
+        assert_ne!(pm, whole, "ratio {ratio}");
+    }
+}

@@ -231,6 +231,12 @@ impl Buckets {
         }
     }
 
+    /// `ends()[k]`: one past the last item of bucket `k` (empty when
+    /// there are no items).
+    pub fn ends(&self) -> &[usize] {
+        &self.ends
+    }
+
     /// One past the last item of the sorted prefix.
     pub fn sorted_end(&self) -> usize {
         self.sorted.checked_sub(1).map_or(0, |k| self.ends[k])

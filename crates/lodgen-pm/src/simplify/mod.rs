@@ -11,6 +11,7 @@
 //! | `schedule` | which pair next: the greedy heap, or the pass list (costing, bucketing, cost limit) |
 //! | `plan` | the read-only half of a step: placement, `max_error` and `legality` |
 //! | `walk` | the batched in-order pass walk (plans in parallel, contractions in order) |
+//! | `partition` | clusters simplified in parallel first, their logs merged (large meshes) |
 //! | `contract` | one contraction: fans, features, attributes, log, heap |
 //! | `legality` | link condition, flips, slivers, duplicates ([`Rejected`]) |
 //! | `stats` | what a run did ([`Stats`], [`Rejections`], [`StopReason`]) |
@@ -38,6 +39,7 @@ pub(crate) mod heap;
 pub(crate) mod legality;
 mod options;
 pub(crate) mod pairs;
+mod partition;
 mod plan;
 pub(crate) mod quadric;
 mod schedule;
@@ -48,7 +50,7 @@ mod walk;
 pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 pub use options::{
     Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
-    DEFAULT_PASS_FACTOR,
+    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
 };
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
 
@@ -323,6 +325,9 @@ impl Simplifier {
         // timed once, not per step (two clock reads per contraction were
         // 2 % of a bunny run)
         let t0 = Instant::now();
+        if let Some(size) = self.partition_size() {
+            self.run_partitioned(size);
+        }
         let batched = matches!(self.opts.schedule, Schedule::Passes { .. })
             && rayon::current_num_threads() > 1;
         let mut walk = || loop {

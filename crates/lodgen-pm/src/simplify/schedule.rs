@@ -17,7 +17,7 @@ type CostedChunk = (Vec<PassEntry>, Vec<u32>, Vec<u32>);
 
 /// A pass entry's bucket: the top 11 bits of its cost's order key.
 #[inline]
-fn pass_bucket(cost: f32) -> usize {
+pub(super) fn pass_bucket(cost: f32) -> usize {
     (f32_order_key(cost) >> 21) as usize
 }
 
@@ -25,7 +25,7 @@ fn pass_bucket(cost: f32) -> usize {
 /// stably from entries generated in (a, b) order, this is the total order
 /// (cost, a, b).
 #[inline]
-fn pass_order(x: &PassEntry) -> u32 {
+pub(super) fn pass_order(x: &PassEntry) -> u32 {
     f32_order_key(x.cost)
 }
 
