@@ -1,8 +1,10 @@
 //! `cargo xtask fuzz [--cases N] [--seed S]`: structure-aware mutations of
 //! valid files of every input format (`lodgen::fuzz::seeds`: OBJ, ASCII and
-//! binary PLY, SMF, GLB plain and quantized + meshopt-compressed), each run
-//! in-process through `lodgen::fuzz::run_case` (read, build, write, inspect,
-//! read back) with a timeout. Cases and shrinking come from proptest's
+//! binary PLY, SMF, GLB plain, quantized + meshopt-compressed, and with a
+//! `LODGEN_progressive` stream written at run time), each run in-process
+//! through `lodgen::fuzz::run_case` (inspect and stream decode + replay of
+//! GLB input, read, measure, build, write, inspect, read back) with a
+//! timeout. Cases and shrinking come from proptest's
 //! runner with a fixed seed, so a run is reproducible. A panic, a hang or a
 //! defect `run_case` reports is shrunk to a small case, stored under
 //! `tests/fuzz-regressions/` (replayed by `cargo test` forever, see
@@ -109,6 +111,25 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
     }
 }
 
+/// The seed's bytes with the mutations applied: to the whole file, or with
+/// `focused` to the seed's focus only (kept at its length: cut bytes are
+/// zero-filled, added ones dropped), so the container stays readable.
+fn mutated(seed: &lodgen::fuzz::Seed, muts: &[Mutation], focused: bool) -> Vec<u8> {
+    let mut bytes = seed.bytes.clone();
+    match seed.focus.clone().filter(|_| focused) {
+        Some(range) => {
+            let mut part = bytes[range.clone()].to_vec();
+            for m in muts {
+                apply(&mut part, m);
+            }
+            part.resize(range.len(), 0);
+            bytes[range].copy_from_slice(&part);
+        }
+        None => muts.iter().for_each(|m| apply(&mut bytes, m)),
+    }
+    bytes
+}
+
 /// What a case did, or the defect it found.
 fn run_with_timeout(dir: &Path, ext: &'static str, bytes: Vec<u8>) -> Result<String, String> {
     let (tx, rx) = mpsc::channel();
@@ -169,15 +190,18 @@ pub fn run(args: &[String]) -> Result<()> {
         },
         TestRng::from_seed(RngAlgorithm::ChaCha, &rng_seed),
     );
-    let strategy = (0..seeds.len(), prop::collection::vec(mutation(), 1..6));
+    // focused: the mutations go to the seed's focus (the progressive
+    // stream) only, the file around it intact
+    let strategy = (
+        0..seeds.len(),
+        prop::collection::vec(mutation(), 1..6),
+        any::<bool>(),
+    );
     let t0 = Instant::now();
     let outcomes = std::cell::RefCell::new(std::collections::BTreeMap::<String, usize>::new());
-    let result = runner.run(&strategy, |(s, muts)| {
+    let result = runner.run(&strategy, |(s, muts, focused)| {
         let seed = &seeds[s];
-        let mut bytes = seed.bytes.clone();
-        for m in &muts {
-            apply(&mut bytes, m);
-        }
+        let bytes = mutated(seed, &muts, focused);
         match run_with_timeout(work.path(), seed.ext, bytes) {
             Ok(what) => {
                 let kind = what.split(':').next().unwrap_or("").to_string();
@@ -203,12 +227,9 @@ pub fn run(args: &[String]) -> Result<()> {
             println!("fuzz: no panic, hang or defect");
             Ok(())
         }
-        Err(TestError::Fail(why, (s, muts))) => {
+        Err(TestError::Fail(why, (s, muts, focused))) => {
             let seed_file = &seeds[s];
-            let mut bytes = seed_file.bytes.clone();
-            for m in &muts {
-                apply(&mut bytes, m);
-            }
+            let bytes = mutated(seed_file, &muts, focused);
             let dir = regressions_dir();
             std::fs::create_dir_all(&dir)?;
             let name = format!(

@@ -726,8 +726,16 @@ pub fn merged_mesh(scene: &Scene) -> lodgen_pm::Mesh {
     m
 }
 
-/// `lodgen measure A B`.
+/// `lodgen measure A B`: prints [`measure_report`].
 pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<()> {
+    print!("{}", measure_report(a, b, samples, as_json)?);
+    Ok(())
+}
+
+/// What `lodgen measure A B` prints: a table, or JSON with `as_json`.
+pub fn measure_report(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<String> {
+    use std::fmt::Write as _;
+    let mut out = String::new();
     if !(samples > 0.0 && samples.is_finite()) {
         bail!("--samples must be positive");
     }
@@ -743,7 +751,8 @@ pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<
     )
     .context("measuring")?;
     if as_json {
-        println!(
+        writeln!(
+            out,
             "{}",
             serde_json::to_string_pretty(&json!({
                 "a": a.display().to_string(), "b": b.display().to_string(),
@@ -752,19 +761,24 @@ pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<
                 "b_to_a": {"hausdorff": r.b_to_a.max, "mean": r.b_to_a.mean, "rms": r.b_to_a.rms, "samples": r.b_to_a.samples},
                 "hausdorff_percent": r.hausdorff_percent(), "rms_percent": r.rms_percent(), "mean_percent": r.mean_percent(),
             }))?
-        );
+        )?;
     } else {
-        println!(
+        writeln!(
+            out,
             "A = {} ({} triangles), B = {} ({} triangles)",
             a.display(),
             ma.triangles.len(),
             b.display(),
             mb.triangles.len()
-        );
-        println!("bounding-box diagonal of A: {:.6}", r.diagonal);
-        println!("direction   hausdorff (% diag)       mean (% diag)            rms (% diag)");
+        )?;
+        writeln!(out, "bounding-box diagonal of A: {:.6}", r.diagonal)?;
+        writeln!(
+            out,
+            "direction   hausdorff (% diag)       mean (% diag)            rms (% diag)"
+        )?;
         for (name, d) in [("A -> B", r.a_to_b), ("B -> A", r.b_to_a)] {
-            println!(
+            writeln!(
+                out,
                 "{name:<10}  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)",
                 d.max,
                 r.percent(d.max),
@@ -772,9 +786,10 @@ pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<
                 r.percent(d.mean),
                 d.rms,
                 r.percent(d.rms)
-            );
+            )?;
         }
-        println!(
+        writeln!(
+            out,
             "symmetric   {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)  {:<12.6e} ({:>7.4}%)",
             r.hausdorff(),
             r.hausdorff_percent(),
@@ -782,9 +797,9 @@ pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<
             r.mean_percent(),
             r.rms(),
             r.rms_percent()
-        );
+        )?;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// FNV-1a, 64 bit: a small, stable hash for golden summaries.

@@ -1,11 +1,18 @@
 //! What the fuzzer (`cargo xtask fuzz`) runs, shared with the replay test
-//! of `tests/fuzz-regressions/`: valid seed files of every input format, and
-//! one case = read a (mutated) file, and when it reads, build its LODs, write
-//! them and inspect the result. Errors are the expected outcome of most
+//! of `tests/fuzz-regressions/`: valid seed files of every input format
+//! (and a GLB written with `--progressive`, made at run time by the build
+//! command's own entry point, so it follows the current stream format), and
+//! one case = read a (mutated) file, and when it reads, `lodgen measure` it
+//! against itself, build its LODs, write them and inspect the result; a GLB
+//! case also goes through `lodgen inspect` and, when it has a
+//! `LODGEN_progressive` stream, through the viewer's decode and replay
+//! (`view --print-levels`). Errors are the expected outcome of most
 //! mutations; only a panic or a hang is a defect, and the callers check for
 //! those (`catch_unwind`, a timeout per case).
 
 use std::path::Path;
+
+use clap::Parser;
 
 use crate::gltf_out::{write_lods, Compression, WriteOptions};
 use crate::io::read_scene;
@@ -20,6 +27,9 @@ pub struct Seed {
     pub name: &'static str,
     /// The file's bytes.
     pub bytes: Vec<u8>,
+    /// A part worth mutating on its own, the file's structure kept: the
+    /// `LODGEN_progressive` stream's bytes in the progressive seed.
+    pub focus: Option<std::ops::Range<usize>>,
 }
 
 /// A small torus (96 triangles) in every input format: OBJ with normals and
@@ -79,21 +89,25 @@ pub fn seeds(dir: &Path) -> Result<Vec<Seed>, String> {
             ext: "obj",
             name: "obj",
             bytes: obj.into_bytes(),
+            focus: None,
         },
         Seed {
             ext: "smf",
             name: "smf",
             bytes: smf.into_bytes(),
+            focus: None,
         },
         Seed {
             ext: "ply",
             name: "ply-ascii",
             bytes: ascii.into_bytes(),
+            focus: None,
         },
         Seed {
             ext: "ply",
             name: "ply-binary",
             bytes: binary,
+            focus: None,
         },
     ];
     // GLB seeds: the OBJ through lodgen itself
@@ -119,9 +133,48 @@ pub fn seeds(dir: &Path) -> Result<Vec<Seed>, String> {
             ext: "glb",
             name,
             bytes,
+            focus: None,
         });
     }
+    let (bytes, focus) = progressive_seed(&obj_path, dir)?;
+    seeds.push(Seed {
+        ext: "glb",
+        name: "glb-progressive",
+        bytes,
+        focus: Some(focus),
+    });
     Ok(seeds)
+}
+
+/// The command line's build arguments, for [`progressive_seed`].
+#[derive(Parser)]
+struct Command {
+    #[command(flatten)]
+    build: crate::cli::BuildArgs,
+}
+
+/// `lodgen seed.obj --progressive --levels 50%,10%` through
+/// [`crate::cli::build_file`]: whatever the stream format is today. Returns
+/// the GLB and where its stream is.
+fn progressive_seed(obj: &Path, dir: &Path) -> Result<(Vec<u8>, std::ops::Range<usize>), String> {
+    let out = dir.join("glb-progressive.glb");
+    let args = Command::try_parse_from(["lodgen", "--progressive", "--levels", "50%,10%", "-q"])
+        .map_err(|e| e.to_string())?
+        .build;
+    crate::cli::build_file(obj, &out, &args, &mut |_| {}).map_err(|e| format!("{e:#}"))?;
+    let bytes = std::fs::read(&out).map_err(|e| e.to_string())?;
+    let found = crate::progressive::read_glb(&bytes)
+        .map_err(|e| e.to_string())?
+        .ok_or("no LODGEN_progressive in the progressive seed")?
+        .0;
+    // the BIN chunk's data starts after the header, the JSON chunk and its
+    // own chunk header
+    let json_len = bytes
+        .get(12..16)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        .ok_or("short GLB")?;
+    let start = 12 + 8 + json_len + 8 + found.range.1;
+    Ok((bytes, start..start + found.range.2))
 }
 
 /// Two levels and light sampling: a case must stay cheap.
@@ -148,7 +201,24 @@ pub fn run_case(dir: &Path, ext: &str, bytes: &[u8]) -> Result<String, String> {
     if let Err(e) = std::fs::write(&input, bytes) {
         return Ok(format!("could not write the case: {e}"));
     }
-    let scene = match read_scene(&input) {
+    let mut stream = "";
+    if ext == "glb" {
+        // the input itself through `lodgen inspect` and the stream decoder
+        // (errors are the usual outcome; the case goes on either way)
+        let _ = crate::inspect::inspect(&input).map(|r| r.to_string());
+        if let Ok(Some(_)) = crate::progressive::read_file(&input) {
+            stream = match crate::view::print_levels(&input) {
+                Ok(_) => "stream replayed, ",
+                Err(_) => "stream error, ",
+            };
+        }
+    }
+    read_measure_build(dir, &input).map(|what| format!("{stream}{what}"))
+}
+
+/// The rest of [`run_case`]: read, measure, build, write, inspect, read back.
+fn read_measure_build(dir: &Path, input: &Path) -> Result<String, String> {
+    let scene = match read_scene(input) {
         Ok(s) => s,
         Err(e) => return Ok(format!("read error: {e}")),
     };
@@ -160,6 +230,9 @@ pub fn run_case(dir: &Path, ext: &str, bytes: &[u8]) -> Result<String, String> {
         .sum();
     if triangles > MAX_BUILD_TRIANGLES {
         return Ok(format!("read {triangles} triangles (not simplified)"));
+    }
+    if let Err(e) = crate::cli::measure_report(input, input, 0.5, true) {
+        return Ok(format!("measure error: {e:#}"));
     }
     let builds = match build_lods(&scene, &small_options(), &mut |_| {}) {
         Ok(b) => b,
