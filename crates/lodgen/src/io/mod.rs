@@ -41,7 +41,10 @@ use crate::scene::{Primitive, Scene};
 /// plus [`DECODED_BYTES_FLOOR`]. Every count is checked against the bytes
 /// that hold its data and against this cap *before* anything is allocated,
 /// so a lying count fails at once with an error naming it. The PLY reader
-/// sizes its arrays by the file's length.
+/// sizes its arrays by the file's length. OBJ and SMF declare no counts:
+/// their arrays grow with the lines read, at most 14 bytes per input byte
+/// (a huge polygon's fan) plus one [`Primitive`] and a few hundred bytes
+/// per OBJ object (`tests/read_limits_text.rs` checks the worst cases).
 pub const DECODED_BYTES_PER_INPUT_BYTE: u64 = 64;
 
 /// The part of the memory cap every file gets whatever its size (64 MiB).
