@@ -341,6 +341,17 @@ fn report(meshes: &[&str], vars: &[Variant], rows: &[Row], renders: &[(String, S
          defect.\n"
     );
     let _ = writeln!(s, "![error against triangle count](compare.png)\n");
+    summary(&mut s, meshes, vars, rows);
+    mesh_tables(&mut s, meshes, vars, rows);
+    if !renders.is_empty() {
+        render_table(&mut s, renders);
+    }
+    s
+}
+
+/// The summary: the hybrid's verdict per weight, the best method per mesh
+/// and ratio, where a method stopped early.
+fn summary(s: &mut String, meshes: &[&str], vars: &[Variant], rows: &[Row]) {
     // hybrid verdict, per weight
     let _ = writeln!(s, "## Summary\n");
     for h_label in ["qem-curvature/w=1", "qem-curvature", "qem-curvature/w=16"] {
@@ -403,64 +414,76 @@ fn report(meshes: &[&str], vars: &[Variant], rows: &[Row], renders: &[(String, S
             );
         }
     }
+}
+
+/// One Markdown table row: `| a | b | … |`.
+fn table_row<S: AsRef<str>>(s: &mut String, cells: impl IntoIterator<Item = S>) {
+    s.push('|');
+    for c in cells {
+        let _ = write!(s, " {} |", c.as_ref());
+    }
+    s.push('\n');
+}
+
+/// Per mesh, every variant at every ratio.
+fn mesh_tables(s: &mut String, meshes: &[&str], vars: &[Variant], rows: &[Row]) {
+    let header = [
+        "target",
+        "method",
+        "triangles",
+        "H %",
+        "in→out %",
+        "out→in %",
+        "RMS %",
+        "time ms",
+        "rej/rb",
+        "note",
+    ];
     for m in meshes {
-        let _ = writeln!(
-            s,
-            "\n## {m}\n\n| target | method | triangles | H % | in→out % | out→in % | RMS % | time ms | rej/rb | note |\n\
-             |---|---|---:|---:|---:|---:|---:|---:|---:|---|"
-        );
+        let _ = writeln!(s, "\n## {m}\n");
+        table_row(s, header);
+        let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
         for x in rows.iter().filter(|x| x.mesh == *m) {
-            let _ = writeln!(
+            let note = if x.note.is_empty() {
+                ""
+            } else {
+                "**stopped early**"
+            };
+            table_row(
                 s,
-                "| {} ({}) | `{}` | {} | {:.3} | {:.3} | {:.3} | {:.4} | {:.0} | {}/{} | {} |",
-                pct_label(x.ratio),
-                x.target,
-                vars[x.variant].label,
-                x.triangles,
-                x.hausdorff,
-                x.in_to_out,
-                x.out_to_in,
-                x.rms,
-                x.millis,
-                x.prevented,
-                x.repaired,
-                if x.note.is_empty() {
-                    ""
-                } else {
-                    "**stopped early**"
-                }
+                [
+                    format!("{} ({})", pct_label(x.ratio), x.target),
+                    format!("`{}`", vars[x.variant].label),
+                    x.triangles.to_string(),
+                    format!("{:.3}", x.hausdorff),
+                    format!("{:.3}", x.in_to_out),
+                    format!("{:.3}", x.out_to_in),
+                    format!("{:.4}", x.rms),
+                    format!("{:.0}", x.millis),
+                    format!("{}/{}", x.prevented, x.repaired),
+                    note.to_string(),
+                ],
             );
         }
     }
-    if !renders.is_empty() {
-        let _ = writeln!(
+}
+
+/// The renders, five to a row: labels, then images.
+fn render_table(s: &mut String, renders: &[(String, String)]) {
+    let _ = writeln!(
+        s,
+        "\n## The bunny at 10 %\n\nFlat-shaded, same camera, {RENDER_SIZE}×{RENDER_SIZE} \
+         (software rasterizer in `xtask/src/render.rs`; back faces red).\n"
+    );
+    for chunk in renders.chunks(5) {
+        table_row(s, chunk.iter().map(|r| r.0.as_str()));
+        let _ = writeln!(s, "|{}", "---|".repeat(chunk.len()));
+        table_row(
             s,
-            "\n## The bunny at 10 %\n\nFlat-shaded, same camera, {RENDER_SIZE}×{RENDER_SIZE} \
-             (software rasterizer in `xtask/src/render.rs`; back faces red).\n"
+            chunk.iter().map(|r| format!("![{}](renders/{})", r.0, r.1)),
         );
-        for chunk in renders.chunks(5) {
-            let _ = writeln!(
-                s,
-                "| {} |",
-                chunk
-                    .iter()
-                    .map(|r| r.0.as_str())
-                    .collect::<Vec<_>>()
-                    .join(" | ")
-            );
-            let _ = writeln!(s, "|{}", "---|".repeat(chunk.len()));
-            let _ = writeln!(
-                s,
-                "| {} |\n",
-                chunk
-                    .iter()
-                    .map(|r| format!("![{}](renders/{})", r.0, r.1))
-                    .collect::<Vec<_>>()
-                    .join(" | ")
-            );
-        }
+        s.push('\n');
     }
-    s
 }
 
 fn pct_label(r: f64) -> String {

@@ -241,7 +241,6 @@ fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
 pub fn run(cargo_test_args: &[String]) -> Result<()> {
     let root = workspace_root();
     let out = root.join("target").join("test-out");
-    let js = root.join("tests").join("js");
     let ci = is_ci();
     let mut steps = Steps::default();
     let t_all = Instant::now();
@@ -280,15 +279,27 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
         ),
     }
 
-    // 3 and 4. JS checks on what the Rust tests wrote.
-    let (require, why) = outputs_required(&root)?;
+    // 3. JS checks on what the Rust tests wrote.
+    js_checks(&root, &out, ci, &mut steps)?;
+
+    // 4. The Python package.
+    python_tests(&root, ci, &mut steps);
+
+    print_summary(&steps, t_all.elapsed().as_secs_f64())
+}
+
+/// glTF-Validator on every glTF file in `out` and Babylon.js's MSFT_lod
+/// loader on every report / .glb pair (after `npm ci` when needed).
+fn js_checks(root: &Path, out: &Path, ci: bool, steps: &mut Steps) -> Result<()> {
+    let js = root.join("tests").join("js");
+    let (require, why) = outputs_required(root)?;
     println!(
         "xtask test: test outputs in {} are {} ({why})",
         out.display(),
         if require { "required" } else { "optional" }
     );
-    let gltf_files = files_under(&out, &|n| n.ends_with(".glb") || n.ends_with(".gltf"))?;
-    let pairs: Vec<(PathBuf, PathBuf)> = files_under(&out, &|n| n.ends_with(".report.json"))?
+    let gltf_files = files_under(out, &|n| n.ends_with(".glb") || n.ends_with(".gltf"))?;
+    let pairs: Vec<(PathBuf, PathBuf)> = files_under(out, &|n| n.ends_with(".report.json"))?
         .into_iter()
         .filter_map(|report| {
             let name = report.file_name()?.to_string_lossy().into_owned();
@@ -327,7 +338,7 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
         if require {
             validate.arg("--require");
         }
-        validate.arg(&out).current_dir(&root);
+        validate.arg(out).current_dir(root);
         steps.run("glTF-Validator", &mut validate);
 
         let chromium = chromium_path();
@@ -350,26 +361,25 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
             steps.missing("Babylon.js MSFT_lod", ci, &why);
         } else {
             for (glb, report) in &pairs {
-                let rel = glb.strip_prefix(&out).unwrap_or(glb).display().to_string();
+                let rel = glb.strip_prefix(out).unwrap_or(glb).display().to_string();
                 steps.run(
                     &format!("Babylon.js MSFT_lod {rel}"),
                     Command::new("node")
                         .arg(js.join("babylon-lod.mjs"))
                         .arg(glb)
                         .arg(report)
-                        .current_dir(&root),
+                        .current_dir(root),
                 );
             }
         }
     }
 
-    // 4. The Python package.
-    python_tests(&root, ci, &mut steps);
+    Ok(())
+}
 
-    println!(
-        "\nxtask test summary ({:.1} s):",
-        t_all.elapsed().as_secs_f64()
-    );
+/// Prints one line per step and the totals; fails when a step failed.
+fn print_summary(steps: &Steps, secs: f64) -> Result<()> {
+    println!("\nxtask test summary ({:.1} s):", secs);
     for s in &steps.0 {
         let word = match s.outcome {
             Outcome::Passed => "ok     ",

@@ -92,11 +92,6 @@ pub fn inspect(path: &Path) -> Result<InspectReport, InspectError> {
 }
 
 fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
-    let malformed = |pointer: String, reason: &str| InspectError::Malformed {
-        path: path.to_path_buf(),
-        pointer,
-        reason: reason.to_string(),
-    };
     let list = |key: &str| -> Vec<String> {
         root.get(key)
             .and_then(Value::as_array)
@@ -107,55 +102,116 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
             })
             .unwrap_or_default()
     };
-    let array = |key: &str| -> &[Value] {
-        root.get(key)
-            .and_then(Value::as_array)
-            .map_or(&[], Vec::as_slice)
+    let mut doc = Doc {
+        path,
+        nodes: array(root, "nodes"),
+        meshes: array(root, "meshes"),
+        accessors: array(root, "accessors"),
+        in_scene: Vec::new(),
     };
-    let nodes = array("nodes");
-    let meshes = array("meshes");
-    let accessors = array("accessors");
-    let index = |v: &Value, pointer: String, len: usize| -> Result<usize, InspectError> {
+    doc.in_scene = doc.scene_membership(array(root, "scenes"))?;
+
+    let mut warnings = Vec::new();
+    if list("extensionsRequired").iter().any(|e| e == "MSFT_lod") {
+        warnings
+            .push("MSFT_lod is in extensionsRequired (clients without it refuse the file)".into());
+    }
+    let mut chains = Vec::new();
+    let mut in_chain = vec![false; doc.nodes.len()];
+    for (n, node) in doc.nodes.iter().enumerate() {
+        if let Some(chain) = doc.chain(n, node, &mut in_chain, &mut warnings)? {
+            chains.push(chain);
+        }
+    }
+    let mut plain = Vec::new();
+    for (n, node) in doc.nodes.iter().enumerate() {
+        if !in_chain[n] && node.get("mesh").is_some() {
+            plain.push(doc.level(n, None)?);
+        }
+    }
+    Ok(InspectReport {
+        path: path.to_path_buf(),
+        extensions_used: list("extensionsUsed"),
+        extensions_required: list("extensionsRequired"),
+        chains,
+        plain,
+        warnings,
+    })
+}
+
+/// The array `root[key]` (empty when absent or not an array).
+fn array<'a>(root: &'a Value, key: &str) -> &'a [Value] {
+    root.get(key)
+        .and_then(Value::as_array)
+        .map_or(&[], Vec::as_slice)
+}
+
+/// The parts of the document the report reads, every index checked.
+struct Doc<'a> {
+    path: &'a Path,
+    nodes: &'a [Value],
+    meshes: &'a [Value],
+    accessors: &'a [Value],
+    /// Per node: reachable from a scene.
+    in_scene: Vec<bool>,
+}
+
+impl Doc<'_> {
+    fn malformed(&self, pointer: String, reason: &str) -> InspectError {
+        InspectError::Malformed {
+            path: self.path.to_path_buf(),
+            pointer,
+            reason: reason.to_string(),
+        }
+    }
+
+    fn index(&self, v: &Value, pointer: String, len: usize) -> Result<usize, InspectError> {
         v.as_u64()
             .map(|i| i as usize)
             .filter(|&i| i < len)
-            .ok_or_else(|| malformed(pointer, "index out of range"))
-    };
-
-    // Nodes reachable from a scene (iterative walk, cycle-safe).
-    let mut in_scene = vec![false; nodes.len()];
-    let mut stack = Vec::new();
-    for (s, scene) in array("scenes").iter().enumerate() {
-        for (j, n) in scene
-            .get("nodes")
-            .and_then(Value::as_array)
-            .map_or(&[][..], Vec::as_slice)
-            .iter()
-            .enumerate()
-        {
-            stack.push(index(n, format!("/scenes/{s}/nodes/{j}"), nodes.len())?);
-        }
+            .ok_or_else(|| self.malformed(pointer, "index out of range"))
     }
-    while let Some(n) = stack.pop() {
-        if std::mem::replace(&mut in_scene[n], true) {
-            continue;
-        }
-        if let Some(children) = nodes[n].get("children").and_then(Value::as_array) {
-            for (j, c) in children.iter().enumerate() {
-                stack.push(index(c, format!("/nodes/{n}/children/{j}"), nodes.len())?);
+
+    /// Nodes reachable from a scene (iterative walk, cycle-safe).
+    fn scene_membership(&self, scenes: &[Value]) -> Result<Vec<bool>, InspectError> {
+        let nodes = self.nodes;
+        let mut in_scene = vec![false; nodes.len()];
+        let mut stack = Vec::new();
+        for (s, scene) in scenes.iter().enumerate() {
+            for (j, n) in scene
+                .get("nodes")
+                .and_then(Value::as_array)
+                .map_or(&[][..], Vec::as_slice)
+                .iter()
+                .enumerate()
+            {
+                stack.push(self.index(n, format!("/scenes/{s}/nodes/{j}"), nodes.len())?);
             }
         }
+        while let Some(n) = stack.pop() {
+            if std::mem::replace(&mut in_scene[n], true) {
+                continue;
+            }
+            if let Some(children) = nodes[n].get("children").and_then(Value::as_array) {
+                for (j, c) in children.iter().enumerate() {
+                    stack.push(self.index(c, format!("/nodes/{n}/children/{j}"), nodes.len())?);
+                }
+            }
+        }
+        Ok(in_scene)
     }
 
-    let count_of = |a: &Value, pointer: String| -> Result<u64, InspectError> {
-        let i = index(a, pointer.clone(), accessors.len())?;
-        accessors[i]
+    fn count_of(&self, a: &Value, pointer: String) -> Result<u64, InspectError> {
+        let i = self.index(a, pointer.clone(), self.accessors.len())?;
+        self.accessors[i]
             .get("count")
             .and_then(Value::as_u64)
-            .ok_or_else(|| malformed(format!("/accessors/{i}"), "accessor without count"))
-    };
-    let level_of = |n: usize, coverage: Option<f64>| -> Result<InspectLevel, InspectError> {
-        let node = &nodes[n];
+            .ok_or_else(|| self.malformed(format!("/accessors/{i}"), "accessor without count"))
+    }
+
+    /// Node `n` as a level: its mesh's triangle and vertex counts.
+    fn level(&self, n: usize, coverage: Option<f64>) -> Result<InspectLevel, InspectError> {
+        let node = &self.nodes[n];
         let mut level = InspectLevel {
             node: n,
             name: node.get("name").and_then(Value::as_str).map(String::from),
@@ -163,24 +219,24 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
             triangles: 0,
             vertices: 0,
             screen_coverage: coverage,
-            in_scene: in_scene[n],
+            in_scene: self.in_scene[n],
         };
         if let Some(m) = node.get("mesh") {
-            let m = index(m, format!("/nodes/{n}/mesh"), meshes.len())?;
+            let m = self.index(m, format!("/nodes/{n}/mesh"), self.meshes.len())?;
             level.mesh = Some(m);
-            let prims = meshes[m]
+            let prims = self.meshes[m]
                 .get("primitives")
                 .and_then(Value::as_array)
                 .map_or(&[][..], Vec::as_slice);
             for (p, prim) in prims.iter().enumerate() {
                 let at = format!("/meshes/{m}/primitives/{p}");
                 let vertices = match prim.get("attributes").and_then(|a| a.get("POSITION")) {
-                    Some(a) => count_of(a, format!("{at}/attributes/POSITION"))?,
+                    Some(a) => self.count_of(a, format!("{at}/attributes/POSITION"))?,
                     None => 0,
                 };
                 level.vertices += vertices;
                 let corners = match prim.get("indices") {
-                    Some(a) => count_of(a, format!("{at}/indices"))?,
+                    Some(a) => self.count_of(a, format!("{at}/indices"))?,
                     None => vertices,
                 };
                 if prim.get("mode").and_then(Value::as_u64).unwrap_or(4) == 4 {
@@ -189,21 +245,22 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
             }
         }
         Ok(level)
-    };
-
-    let mut warnings = Vec::new();
-    if list("extensionsRequired").iter().any(|e| e == "MSFT_lod") {
-        warnings
-            .push("MSFT_lod is in extensionsRequired (clients without it refuse the file)".into());
     }
-    let mut chains = Vec::new();
-    let mut in_chain = vec![false; nodes.len()];
-    for (n, node) in nodes.iter().enumerate() {
+
+    /// The chain of node `n` when it carries `MSFT_lod`; marks its members
+    /// in `in_chain` and adds what clients would trip over to `warnings`.
+    fn chain(
+        &self,
+        n: usize,
+        node: &Value,
+        in_chain: &mut [bool],
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<LodChain>, InspectError> {
         let Some(ids) = node.pointer("/extensions/MSFT_lod/ids") else {
-            continue;
+            return Ok(None);
         };
         let ids = ids.as_array().ok_or_else(|| {
-            malformed(
+            self.malformed(
                 format!("/nodes/{n}/extensions/MSFT_lod/ids"),
                 "not an array",
             )
@@ -215,10 +272,10 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
             .unwrap_or_default();
         let mut members = vec![n];
         for (j, id) in ids.iter().enumerate() {
-            members.push(index(
+            members.push(self.index(
                 id,
                 format!("/nodes/{n}/extensions/MSFT_lod/ids/{j}"),
-                nodes.len(),
+                self.nodes.len(),
             )?);
         }
         if !coverage.is_empty() && coverage.len() != members.len() {
@@ -231,7 +288,7 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
         let mut levels = Vec::with_capacity(members.len());
         for (k, &m) in members.iter().enumerate() {
             in_chain[m] = true;
-            let level = level_of(m, coverage.get(k).copied().flatten())?;
+            let level = self.level(m, coverage.get(k).copied().flatten())?;
             if k > 0 && level.in_scene {
                 warnings.push(format!(
                     "node {m} (level {k} of node {n}) is in a scene: clients draw it too"
@@ -239,22 +296,8 @@ fn report(path: &Path, root: &Value) -> Result<InspectReport, InspectError> {
             }
             levels.push(level);
         }
-        chains.push(LodChain { levels });
+        Ok(Some(LodChain { levels }))
     }
-    let mut plain = Vec::new();
-    for (n, node) in nodes.iter().enumerate() {
-        if !in_chain[n] && node.get("mesh").is_some() {
-            plain.push(level_of(n, None)?);
-        }
-    }
-    Ok(InspectReport {
-        path: path.to_path_buf(),
-        extensions_used: list("extensionsUsed"),
-        extensions_required: list("extensionsRequired"),
-        chains,
-        plain,
-        warnings,
-    })
 }
 
 fn label(level: &InspectLevel) -> String {

@@ -10,18 +10,8 @@ use std::time::Duration;
 use lodgen_pm::{PrepareStats, Rejections, StopReason};
 use serde_json::{json, Value};
 
-use crate::cli::BuiltFile;
-
-/// Wall time of one file's phases outside the meshes' builds.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FileTimes {
-    /// Parsing the input file.
-    pub read: Duration,
-    /// Every mesh's build ([`crate::lod::BuildTimes`] splits it).
-    pub build: Duration,
-    /// Writing the glTF (and the progressive stream when asked).
-    pub write: Duration,
-}
+use crate::cli::job::BuiltFile;
+pub use crate::cli::job::FileTimes;
 
 /// One row of the phase table: name, indent level, time.
 struct Phase {

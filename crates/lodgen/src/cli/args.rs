@@ -1,0 +1,403 @@
+//! The arguments of the main job (clap): [`BuildArgs`], the mode enums,
+//! level-list / error-list / weight / τ parsing, and their translation into
+//! [`BuildOptions`] and [`WriteOptions`].
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use lodgen_pm::levels::LevelSpec;
+use lodgen_pm::metric::MeasureOptions;
+use lodgen_pm::{Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
+
+use crate::gltf_out::{Compression, WriteOptions};
+use crate::lod::{self, AttributeWeights, BuildOptions, LevelRequest};
+
+/// Arguments of the main job (`lodgen INPUT ...`).
+#[derive(Args, Debug, Clone)]
+pub struct BuildArgs {
+    /// Input mesh: .obj, .ply (ascii or binary), .smf, .gltf or .glb.
+    /// Several inputs, directories (walked recursively) or quoted glob
+    /// patterns ("assets/**/*.obj") build a batch into --out-dir.
+    #[arg(value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+
+    #[command(flatten)]
+    pub batch: crate::batch::BatchFlags,
+
+    /// Output file, .glb or .gltf (.gltf writes one .bin per level beside
+    /// it). Default: the input's name with .glb, beside the input
+    /// (INPUT.lod.glb when the input is itself a .glb).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+
+    /// Levels to build, finest first or in any order, comma-separated:
+    /// ratios of the input's triangles ("50%", or a fraction like 0.5) or
+    /// absolute triangle counts ("20000"). All levels come from one
+    /// simplification pass.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "50%,10%,2%",
+        conflicts_with = "max_error"
+    )]
+    pub levels: String,
+
+    /// Build levels by measured error instead: for each bound (in % of the
+    /// bounding-box diagonal, e.g. "0.1%,0.5%,2%") the coarsest level whose
+    /// measured symmetric Hausdorff distance stays within it.
+    #[arg(long, value_name = "LIST")]
+    pub max_error: Option<String>,
+
+    /// Pair threshold τ: vertices closer than this may merge even without
+    /// an edge (joins separate parts). In mesh units ("0.01") or in % of the
+    /// bounding-box diagonal ("0.5%"). 0 = edge collapses only.
+    #[arg(long, value_name = "DIST", default_value = "0")]
+    pub tau: String,
+
+    /// How open borders are kept: "weighted" adds constraint planes (border
+    /// vertices may merge along the border), "locked" never touches them.
+    #[arg(long, value_enum, default_value_t = BoundaryMode::Weighted)]
+    pub boundary: BoundaryMode,
+
+    /// Weights of attributes in the cost (Hoppe 1999 attribute quadrics),
+    /// e.g. "normal=0.5,uv=1,color=0.5" (unnamed ones keep their default).
+    /// 1 makes an attribute difference of 1 cost like a displacement by the
+    /// bounding-box diagonal; 0 leaves an attribute out. "uv" weighs every
+    /// TEXCOORD_n set, "color" every COLOR_n set. Seams, hard edges
+    /// and material borders are kept whatever the weights. The defaults
+    /// measured best on spot.obj (`cargo xtask attributes`, ARCHITECTURE.md).
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "normal=0.05,uv=0.5,color=0.5"
+    )]
+    pub attribute_weights: String,
+
+    /// Weight of the border constraint planes relative to the face planes
+    /// (with --boundary weighted; scaled by edge length²).
+    #[arg(long, value_name = "W", default_value_t = DEFAULT_BOUNDARY_WEIGHT)]
+    pub boundary_weight: f64,
+
+    /// Where a merged pair's vertex goes: "optimal" solves the quadric,
+    /// "half-edge" keeps one of the two (every level then reuses input
+    /// positions).
+    #[arg(long, value_enum, default_value_t = PlacementMode::Optimal)]
+    pub placement: PlacementMode,
+
+    /// Order of the contractions (method qem): "passes" costs every pair,
+    /// then contracts the cheapest first, each vertex at most once per pass
+    /// (meshoptimizer's schedule, the fast one); "greedy" is
+    /// Garland–Heckbert to the letter, one heap, always the cheapest pair
+    /// next (about twice as slow, same error on the meshes measured).
+    #[arg(long, value_enum, default_value_t = ScheduleMode::Passes)]
+    pub schedule: ScheduleMode,
+
+    /// Simplification method: "qem" (Garland–Heckbert pair contraction),
+    /// the curvature-adaptive operators of seed 001 — "edge" (full edge
+    /// collapse to the midpoint), "half-edge", "triangle" (three vertices to
+    /// the centroid) — which only touch low-curvature, non-border vertices
+    /// and may stop before the target, or "qem-curvature" (QEM with costs
+    /// scaled by 1 + w·θ/θmax). See docs/compare.md for how they compare.
+    #[arg(long, default_value = "qem", value_parser = ["qem", "edge", "half-edge", "triangle", "qem-curvature"])]
+    pub method: String,
+
+    /// Curvature classification of the adaptive methods: "sigma" (a vertex
+    /// is high-curvature when θ > mean + 2σ), "median" (the lower half is
+    /// removable), or a fraction such as 0.7 (that share is removable).
+    #[arg(long, value_name = "RULE", default_value = "sigma")]
+    pub curvature_threshold: String,
+
+    /// Depth k of the k-ring umbrella over which the region normal is
+    /// averaged (adaptive methods).
+    #[arg(long, value_name = "K", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.k_ring)]
+    pub k_ring: usize,
+
+    /// Weight w of the curvature term in --method qem-curvature.
+    #[arg(long, value_name = "W", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.hybrid_weight)]
+    pub curvature_weight: f64,
+
+    /// Weight every face plane equally instead of by triangle area.
+    #[arg(long)]
+    pub uniform_weights: bool,
+
+    /// Write quantized vertex data (KHR_mesh_quantization): 16-bit
+    /// positions, 8-bit normals, 16-bit UVs.
+    #[arg(long)]
+    pub quantize: bool,
+
+    /// Geometry compression: "none", or "meshopt" (EXT_meshopt_compression,
+    /// with an uncompressed fallback buffer).
+    #[arg(long, value_enum, default_value_t = CompressMode::None)]
+    pub compress: CompressMode,
+
+    /// Also store the vertex-split stream (glTF extension LODGEN_progressive,
+    /// docs/LODGEN_progressive.md) on each mesh's coarsest level, for
+    /// viewers that refine while downloading (`lodgen view`). Off by default.
+    #[arg(long)]
+    pub progressive: bool,
+
+    /// Also write the table as JSON to this file (in batch mode: every
+    /// file's report with its status, error and time).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+
+    /// Area samples per triangle for the error measurement (plus every
+    /// vertex).
+    #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
+    pub samples: f64,
+
+    /// Measure each level's error against the input (`on`), or skip it for
+    /// speed (`off`): errors and screen coverages then come from the
+    /// simplifier's own estimate (the quadric error of the contractions
+    /// still in a level), marked `≈` in the table; RMS is not known.
+    #[arg(long, value_enum, value_name = "on|off", default_value = "on")]
+    pub measure: MeasureMode,
+
+    /// Floor per mesh, in triangles: no level has fewer (nor fewer than 1),
+    /// so a mesh with at most this many (a quad, a card, a decal) is written
+    /// unsimplified. A mesh too small for its requested levels keeps its
+    /// coarsest allowed mesh for them; levels that coincide are written
+    /// once, so its chain is shorter, and the table says so in a note.
+    #[arg(long, value_name = "N", default_value_t = lod::DEFAULT_MIN_TRIANGLES)]
+    pub min_triangles: usize,
+
+    /// No table, no progress bar; errors only.
+    #[arg(short, long)]
+    pub quiet: bool,
+
+    /// Also print simplification statistics: collapses, rejections by
+    /// reason, time per phase.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+/// `--measure`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeasureMode {
+    On,
+    Off,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundaryMode {
+    Weighted,
+    Locked,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlacementMode {
+    Optimal,
+    HalfEdge,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScheduleMode {
+    Passes,
+    Greedy,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompressMode {
+    None,
+    Meshopt,
+}
+
+/// Parse `--levels`: "50%", "0.5" (ratios) or "20000" (triangle counts).
+pub fn parse_levels(list: &str) -> Result<Vec<LevelSpec>> {
+    let mut out = Vec::new();
+    for item in list.split(',').map(str::trim) {
+        if item.is_empty() {
+            bail!("--levels {list:?}: empty entry");
+        }
+        let spec = if let Some(p) = item.strip_suffix('%') {
+            let v: f64 = p
+                .trim()
+                .parse()
+                .with_context(|| format!("--levels: {item:?} is not a percentage"))?;
+            if !(v > 0.0 && v <= 100.0) {
+                bail!("--levels: {item:?} must be in (0%, 100%]");
+            }
+            LevelSpec::Ratio(v / 100.0)
+        } else if let Ok(n) = item.parse::<usize>() {
+            if n == 0 {
+                bail!("--levels: a level needs at least one triangle");
+            }
+            LevelSpec::Triangles(n)
+        } else {
+            let v: f64 = item.parse().with_context(|| {
+                format!(
+                    "--levels: {item:?} is neither a percentage, a fraction nor a triangle count"
+                )
+            })?;
+            if !(v > 0.0 && v <= 1.0) {
+                bail!("--levels: the fraction {item:?} must be in (0, 1]");
+            }
+            LevelSpec::Ratio(v)
+        };
+        out.push(spec);
+    }
+    Ok(out)
+}
+
+/// Parse `--max-error`: percentages of the bounding-box diagonal, returned
+/// as fractions.
+pub fn parse_max_errors(list: &str) -> Result<Vec<f64>> {
+    list.split(',')
+        .map(str::trim)
+        .map(|item| {
+            let p = item.strip_suffix('%').with_context(|| {
+                format!("--max-error: {item:?} must be a percentage of the bounding-box diagonal, e.g. 0.5%")
+            })?;
+            let v: f64 = p
+                .trim()
+                .parse()
+                .with_context(|| format!("--max-error: {item:?} is not a number"))?;
+            if !(v >= 0.0 && v.is_finite()) {
+                bail!("--max-error: {item:?} must be a finite, non-negative percentage");
+            }
+            Ok(v / 100.0)
+        })
+        .collect()
+}
+
+/// Parse `--attribute-weights`: `name=weight` items (`normal`, `uv`,
+/// `color`), comma-separated; names left out keep their default.
+pub fn parse_attribute_weights(list: &str) -> Result<AttributeWeights> {
+    let mut w = AttributeWeights::DEFAULT;
+    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (name, value) = item.split_once('=').with_context(|| {
+            format!("--attribute-weights: {item:?} must be name=weight, e.g. normal=0.5")
+        })?;
+        let v: f32 = value
+            .trim()
+            .parse()
+            .with_context(|| format!("--attribute-weights: {value:?} is not a number"))?;
+        if !(v >= 0.0 && v.is_finite()) {
+            bail!("--attribute-weights: {item:?} must be finite and non-negative");
+        }
+        match name.trim() {
+            "normal" => w.normal = v,
+            "uv" => w.uv = v,
+            "color" => w.color = v,
+            other => bail!("--attribute-weights: unknown attribute {other:?} (normal, uv, color)"),
+        }
+    }
+    Ok(w)
+}
+
+/// Parse `--tau`: mesh units, or "%" of the bounding-box diagonal.
+pub fn parse_tau(s: &str) -> Result<Tau> {
+    let s = s.trim();
+    let (v, pct) = match s.strip_suffix('%') {
+        Some(p) => (p.trim(), true),
+        None => (s, false),
+    };
+    let v: f64 = v
+        .parse()
+        .with_context(|| format!("--tau: {s:?} is not a distance"))?;
+    if !(v >= 0.0 && v.is_finite()) {
+        bail!("--tau: {s:?} must be finite and non-negative");
+    }
+    Ok(if pct {
+        Tau::DiagonalFraction(v / 100.0)
+    } else {
+        Tau::Absolute(v)
+    })
+}
+
+impl BuildArgs {
+    /// The library options these arguments mean.
+    pub fn build_options(&self) -> Result<BuildOptions> {
+        let levels = match &self.max_error {
+            Some(list) => LevelRequest::MaxErrors(parse_max_errors(list)?),
+            None => LevelRequest::Specs(parse_levels(&self.levels)?),
+        };
+        if !(self.boundary_weight >= 0.0 && self.boundary_weight.is_finite()) {
+            bail!("--boundary-weight must be finite and non-negative");
+        }
+        if !(self.samples > 0.0 && self.samples.is_finite()) {
+            bail!("--samples must be positive");
+        }
+        let simplify = SimplifyOptions::DEFAULT
+            .with_tau(parse_tau(&self.tau)?)
+            .with_area_weighted(!self.uniform_weights)
+            .with_boundary(match self.boundary {
+                BoundaryMode::Weighted => Boundary::Weighted(self.boundary_weight),
+                BoundaryMode::Locked => Boundary::Locked,
+            })
+            .with_placement(match self.placement {
+                PlacementMode::Optimal => Placement::Optimal,
+                PlacementMode::HalfEdge => Placement::HalfEdge,
+            })
+            .with_schedule(match self.schedule {
+                ScheduleMode::Passes => SimplifyOptions::DEFAULT.schedule,
+                ScheduleMode::Greedy => Schedule::Greedy,
+            });
+        let method: lodgen_pm::Method = self
+            .method
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--method {:?}: {e:?}", self.method))?;
+        let threshold = match self.curvature_threshold.trim() {
+            "sigma" => lodgen_pm::Threshold::Sigma(lodgen_pm::adaptive::DEFAULT_SIGMA),
+            "median" => lodgen_pm::Threshold::Median,
+            other => {
+                let f: f64 = other.parse().with_context(|| {
+                    format!("--curvature-threshold: {other:?} is not sigma, median or a fraction")
+                })?;
+                if !(f > 0.0 && f < 1.0) {
+                    bail!("--curvature-threshold: the fraction {other:?} must be in (0, 1)");
+                }
+                lodgen_pm::Threshold::Fraction(f)
+            }
+        };
+        if self.k_ring == 0 {
+            bail!("--k-ring must be at least 1");
+        }
+        if !(self.curvature_weight >= 0.0 && self.curvature_weight.is_finite()) {
+            bail!("--curvature-weight must be finite and non-negative");
+        }
+        let adaptive = lodgen_pm::AdaptiveOptions::DEFAULT
+            .with_threshold(threshold)
+            .with_k_ring(self.k_ring)
+            .with_hybrid_weight(self.curvature_weight);
+        Ok(BuildOptions {
+            levels,
+            simplify,
+            method,
+            adaptive,
+            measure: MeasureOptions::DEFAULT.with_samples_per_triangle(self.samples),
+            measured: self.measure == MeasureMode::On,
+            attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
+            min_triangles: self.min_triangles,
+        })
+    }
+
+    pub fn write_options(&self) -> WriteOptions {
+        WriteOptions {
+            quantize: self.quantize,
+            compression: match self.compress {
+                CompressMode::None => Compression::None,
+                CompressMode::Meshopt => Compression::Meshopt,
+            },
+        }
+    }
+}
+
+/// The default output path for `input`.
+pub fn default_output(input: &Path) -> PathBuf {
+    let stem = input.file_stem().map_or_else(
+        || std::ffi::OsString::from("out"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut name = stem.clone();
+    name.push(".glb");
+    let candidate = input.with_file_name(&name);
+    if candidate == input {
+        let mut name = stem;
+        name.push(".lod.glb");
+        input.with_file_name(name)
+    } else {
+        candidate
+    }
+}

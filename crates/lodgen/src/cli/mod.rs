@@ -1,0 +1,27 @@
+//! The command line's building blocks, in the library so tests and the
+//! xtask drive exactly what users run: argument types (clap), level-list
+//! parsing, the build job (read → LODs → write → table / JSON report) and
+//! `measure`.
+//!
+//! Owns user-facing text (tables, progress, error context). The algorithms
+//! are in `lod` and the core; formats in `io` and `gltf_out`.
+//!
+//! # Files
+//! `args` (clap arguments → options) → `job` (`build_file`: read → LODs →
+//! write, timed) → `output` (spinner, tables, `--report`); `measure`
+//! (`lodgen measure`), `golden` (golden summaries).
+
+mod args;
+mod golden;
+pub(crate) mod job;
+mod measure;
+mod output;
+
+pub use args::{
+    default_output, parse_attribute_weights, parse_levels, parse_max_errors, parse_tau,
+    BoundaryMode, BuildArgs, CompressMode, MeasureMode, PlacementMode, ScheduleMode,
+};
+pub use golden::golden_summary;
+pub use job::{build_file, BuiltFile, FileTimes};
+pub use measure::{measure_files, measure_report, merged_mesh};
+pub use output::{build, stop_note, table, write_atomically};

@@ -1,0 +1,228 @@
+//! What users see of a build: the progress spinner, the level table, the
+//! stop note, the `--report` JSON (with [`crate::summary`]'s additions) and
+//! its atomic write.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use serde_json::json;
+
+use crate::lod::{MeshBuild, Progress};
+use crate::scene::Scene;
+use crate::summary;
+
+use super::args::{default_output, BuildArgs};
+use super::job::{build_file, BuiltFile};
+
+impl BuiltFile {
+    /// The JSON `--report` of this file.
+    pub fn report_json(&self, input: &Path) -> serde_json::Value {
+        let mut report = report_json(
+            input,
+            &self.output,
+            &self.scene,
+            &self.builds,
+            &self.level_bytes,
+        );
+        summary::extend_report(&mut report, self);
+        report
+    }
+}
+
+/// The main job. Prints the table (unless quiet) and writes the report.
+pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> {
+    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    let t0 = Instant::now();
+    let bar = show_progress.then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {elapsed:>3} {msg}") {
+            b.set_style(style);
+        }
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    // Phase start, for the measuring ETA (levels take similar times).
+    let mut phase_start = Instant::now();
+    let mut on_progress = |p: Progress| {
+        let Some(b) = &bar else { return };
+        let msg = match p {
+            Progress::Reading => format!("reading {}", input.display()),
+            Progress::Writing => format!("writing {}", output.display()),
+            Progress::Simplifying { mesh, of } => format!("simplifying mesh {}/{of}", mesh + 1),
+            Progress::Measuring { mesh, level, of } => {
+                if level == 0 {
+                    phase_start = Instant::now();
+                }
+                let eta = if level > 0 {
+                    let per = phase_start.elapsed().as_secs_f64() / level as f64;
+                    format!(", about {:.0} s left", per * (of - level) as f64)
+                } else {
+                    String::new()
+                };
+                format!("mesh {}: measuring level {}/{of}{eta}", mesh + 1, level + 1)
+            }
+        };
+        b.set_message(msg);
+    };
+    let built = build_file(input, &output, args, &mut on_progress)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let elapsed = t0.elapsed();
+    let BuiltFile {
+        builds,
+        level_bytes,
+        ..
+    } = &built;
+    if !args.quiet {
+        print!("{}", table(builds, level_bytes));
+        if args.verbose {
+            eprint!("{}", summary::verbose(&built, elapsed));
+        }
+        println!(
+            "wrote {} in {:.2} s",
+            output.display(),
+            elapsed.as_secs_f64()
+        );
+    }
+    if let Some(path) = &args.report {
+        let json = built.report_json(input);
+        write_atomically(path, serde_json::to_string_pretty(&json)?.as_bytes())
+            .with_context(|| format!("writing the report {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Why a simplification stopped short of its target, in words: where it
+/// stopped, and the refusals that stopped it, most frequent first.
+pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> String {
+    let r = &stats.rejected;
+    let mut why: Vec<(usize, &str)> = vec![
+        (
+            r.feature,
+            "would move a seam, hard edge or material border off its line",
+        ),
+        (r.link, "would make the surface non-manifold"),
+        (r.flip, "would flip a face"),
+        (
+            r.duplicate,
+            "would flatten a closed part into a double-sided sheet",
+        ),
+        (r.degenerate, "would leave a sliver"),
+        (r.boundary_pinch, "would pinch two borders together"),
+        (
+            r.locked,
+            "would join two locked vertices (non-manifold input, or --boundary locked)",
+        ),
+        (r.error, "would exceed --max-error"),
+    ];
+    why.retain(|w| w.0 > 0);
+    why.sort_by_key(|w| std::cmp::Reverse(w.0));
+    let reasons: Vec<String> = why.iter().map(|(n, w)| format!("{n} {w}")).collect();
+    let head = match stop {
+        lodgen_pm::StopReason::MaxError => "every remaining contraction exceeds the error bound",
+        _ => "no legal contraction is left",
+    };
+    format!(
+        "simplification stopped at {} triangles, before the coarsest requested level: {head}{}; \
+         coarser levels would repeat this one and are not written",
+        stats.output_triangles,
+        if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" (of the candidates refused, {})", reasons.join(", "))
+        }
+    )
+}
+
+/// The per-mesh table printed on stdout.
+pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
+    let mut s = String::new();
+    for (i, b) in builds.iter().enumerate() {
+        let st = &b.simplified;
+        s += &format!(
+            "{} ({} triangles, {} vertices after welding)\n",
+            if b.lod.name.is_empty() {
+                format!("mesh {i}")
+            } else {
+                b.lod.name.clone()
+            },
+            st.stats.input_triangles,
+            st.stats.input_vertices
+        );
+        if st.stop != lodgen_pm::StopReason::Target {
+            s += &format!("  note: {}\n", stop_note(st.stop, &st.stats));
+        }
+        for n in &b.notes {
+            s += &format!("  note: {n}\n");
+        }
+        s += "  level  triangles  vertices  hausdorff %  rms %     coverage    bytes\n";
+        for (k, (l, e)) in b.lod.levels.iter().zip(&b.errors).enumerate() {
+            let verts: usize = l.primitives.iter().map(|p| p.positions.len()).sum();
+            // --measure off: the quadric's estimate, marked ≈; RMS unknown
+            let (h, rms) = if b.measured {
+                (
+                    format!("{:.4}", e.hausdorff_percent()),
+                    format!("{:.4}", e.rms_percent()),
+                )
+            } else {
+                (format!("≈{:.4}", e.hausdorff_percent()), "—".to_string())
+            };
+            s += &format!(
+                "  {k:>5}  {:>9}  {:>8}  {h:>11}  {rms:>8}  {:>10.3e}  {:>8}\n",
+                l.triangle_count(),
+                verts,
+                l.screen_coverage,
+                bytes.get(i).and_then(|b| b.get(k)).copied().unwrap_or(0),
+            );
+        }
+    }
+    s
+}
+
+fn report_json(
+    input: &Path,
+    output: &Path,
+    scene: &Scene,
+    builds: &[MeshBuild],
+    bytes: &[Vec<u64>],
+) -> serde_json::Value {
+    json!({
+        "input": input.display().to_string(),
+        "output": output.display().to_string(),
+        "meshes": builds.iter().enumerate().map(|(i, b)| json!({
+            "name": b.lod.name,
+            "source_mesh": b.lod.source,
+            "input_triangles": scene.meshes[b.lod.source].primitives.iter().map(|p| p.triangle_count()).sum::<usize>(),
+            "welded_triangles": b.simplified.stats.input_triangles,
+            "measured": b.measured,
+            "stop": format!("{:?}", b.simplified.stop),
+            "notes": b.notes,
+            "levels": b.lod.levels.iter().zip(&b.errors).zip(&b.level_splits).enumerate().map(|(k, ((l, e), s))| json!({
+                "triangles": l.triangle_count(),
+                "vertices": l.primitives.iter().map(|p| p.positions.len()).sum::<usize>(),
+                "splits": s,
+                "hausdorff_percent": e.hausdorff_percent(),
+                "rms_percent": e.rms_percent(),
+                "mean_percent": e.mean_percent(),
+                "original_to_level_percent": e.percent(e.a_to_b.max),
+                "level_to_original_percent": e.percent(e.b_to_a.max),
+                "screen_coverage": l.screen_coverage,
+                "bytes": bytes.get(i).and_then(|b| b.get(k)).copied().unwrap_or(0),
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Write `bytes` to a temporary file beside `path`, then rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
+}
