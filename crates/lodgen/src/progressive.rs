@@ -83,7 +83,12 @@ pub fn attach(
     levels: &[usize],
     placement: Placement,
 ) -> Result<usize, ProgressiveError> {
-    // check the primitive first so that an error leaves `root` unchanged
+    // check the stream and the primitive first so that an error leaves
+    // `root` unchanged
+    let header = lodgen_pm::stream::decode_header(stream)?;
+    let chunks: Vec<usize> = (1..=header.chunks.len())
+        .map(|i| header.chunk_offset(i))
+        .collect();
     let prim_path = format!("/meshes/{mesh}/primitives/{primitive}");
     if root
         .pointer(&prim_path)
@@ -135,7 +140,8 @@ pub fn attach(
         .ok_or_else(|| json_err(format!("{prim_path}/extensions"), "not an object"))?;
     ext.insert(
         EXTENSION.into(),
-        json!({ "bufferView": view, "levels": levels }),
+        json!({ "version": lodgen_pm::stream::VERSION, "bufferView": view, "levels": levels,
+                "chunks": chunks }),
     );
     let used = array_mut(root, "extensionsUsed")?;
     if !used.iter().any(|u| u == EXTENSION) {
@@ -378,22 +384,27 @@ pub struct ChainStream {
 impl ChainStream {
     /// The stream of one [`crate::lod::MeshBuild`] of `mesh`: its whole
     /// progressive mesh (every primitive of the mesh, flattened) with its
-    /// level split counts, on the default 16-bit grid; with every corner's
+    /// level split counts, on the 16-bit grid of [`level_grid`]; with every corner's
     /// wedge and every input vertex attribute
     /// ([`crate::lod::stream_attributes`], the wedge group = the primitive)
     /// when the build tracked wedges (QEM; the curvature-adaptive methods
-    /// stream positions only).
+    /// stream positions only) and the mesh has attributes or several
+    /// primitives (else positions only: the wedges would say nothing).
     pub fn from_build(
         b: &crate::lod::MeshBuild,
         mesh: &crate::scene::SourceMesh,
     ) -> Result<ChainStream, ProgressiveError> {
         use lodgen_pm::stream::{encode, encode_with_attributes, EncodeOptions};
         let pm = &b.simplified.pm;
-        let stream = if pm.wedges.is_some() {
-            let attributes = crate::lod::stream_attributes(mesh);
-            encode_with_attributes(pm, &b.level_splits, EncodeOptions::DEFAULT, &attributes)?
+        let opts = EncodeOptions::DEFAULT.with_grid(level_grid(&b.lod));
+        let attributes = crate::lod::stream_attributes(mesh);
+        // wedges without values or groups would only repeat the topology
+        let informative =
+            !attributes.channels.is_empty() || attributes.groups.iter().any(|&g| g > 0);
+        let stream = if pm.wedges.is_some() && informative {
+            encode_with_attributes(pm, &b.level_splits, opts, &attributes)?
         } else {
-            encode(pm, &b.level_splits, EncodeOptions::DEFAULT)
+            encode(pm, &b.level_splits, opts)
         };
         Ok(ChainStream {
             name: b.lod.name.clone(),
@@ -401,6 +412,19 @@ impl ChainStream {
             stream,
         })
     }
+}
+
+/// The 16-bit grid over the box of every position the chain's levels use
+/// (each primitive's referenced vertices): the `KHR_mesh_quantization`
+/// grid the glTF writer's `--quantize` puts the same chain on, so the
+/// stream's positions equal the quantized file's.
+pub fn level_grid(lod: &crate::scene::LodMesh) -> lodgen_pm::stream::Grid {
+    let used = lod.levels.iter().flat_map(|l| &l.primitives).flat_map(|p| {
+        p.indices
+            .iter()
+            .filter_map(|&i| p.positions.get(i as usize))
+    });
+    lodgen_pm::stream::Grid::around(used, 16)
 }
 
 /// Serialize a GLB from its JSON document and binary chunk.
@@ -532,63 +556,82 @@ mod tests {
         })
     }
 
+    /// A real stream: an icosphere's log with levels [all, none].
+    fn stream() -> (Vec<u8>, Vec<usize>) {
+        let m = lodgen_pm::shapes::icosphere(1);
+        let opts = lodgen_pm::SimplifyOptions::DEFAULT.with_target_triangles(8);
+        let pm = lodgen_pm::simplify(&m.positions, &m.indices(), &opts)
+            .unwrap()
+            .pm;
+        let levels = vec![pm.len(), 0];
+        let bytes = lodgen_pm::stream::encode(&pm, &levels, Default::default());
+        (bytes, levels)
+    }
+
     #[test]
     fn attach_then_find_in_a_glb_chunk() {
+        let (s, levels) = stream();
         let mut root = doc();
         let mut bin = vec![1u8; 6];
         let view = attach(
             &mut root,
             1,
             0,
-            b"LGPMxyz",
-            &[9, 0],
+            &s,
+            &levels,
             Placement::Glb { bin: &mut bin },
         )
         .unwrap();
         assert_eq!(view, 1);
-        assert_eq!(bin.len(), 16);
-        assert_eq!(&bin[8..15], b"LGPMxyz");
-        assert_eq!(root["buffers"][0]["byteLength"], 16);
+        assert_eq!(bin.len(), 8 + s.len().div_ceil(4) * 4);
+        assert_eq!(&bin[8..8 + s.len()], &s[..]);
+        assert_eq!(root["buffers"][0]["byteLength"], bin.len());
         assert_eq!(root["extensionsUsed"], json!(["MSFT_lod", EXTENSION]));
         assert!(root.get("extensionsRequired").is_none());
+        let ext = &root["meshes"][1]["primitives"][0]["extensions"][EXTENSION];
+        let h = lodgen_pm::stream::decode_header(&s).unwrap();
+        assert_eq!(ext["version"], 2);
+        assert_eq!(ext["chunks"], json!([h.chunk_offset(1), s.len()]));
         let f = find(&root).unwrap().unwrap();
         assert_eq!((f.mesh, f.primitive, f.buffer_view), (1, 0, 1));
-        assert_eq!(f.range, (0, 8, 7));
-        assert_eq!(f.levels, vec![9, 0]);
+        assert_eq!(f.range, (0, 8, s.len()));
+        assert_eq!(f.levels, levels);
         assert_eq!(f.lod_meshes, vec![0, 1]);
         assert_eq!(f.screen_coverage, vec![0.5, 0.01]);
     }
 
     #[test]
     fn attach_to_an_external_buffer() {
+        let (s, levels) = stream();
         let mut root = doc();
-        attach(
-            &mut root,
-            1,
-            0,
-            b"abc",
-            &[0],
-            Placement::External {
-                uri: "x.stream.bin".into(),
-            },
-        )
-        .unwrap();
+        let uri = "x.stream.bin".to_string();
+        attach(&mut root, 1, 0, &s, &levels, Placement::External { uri }).unwrap();
         assert_eq!(
             root["buffers"][1],
-            json!({"byteLength": 3, "uri": "x.stream.bin"})
+            json!({"byteLength": s.len(), "uri": "x.stream.bin"})
         );
         assert_eq!(
             root["bufferViews"][1],
-            json!({"buffer": 1, "byteOffset": 0, "byteLength": 3})
+            json!({"buffer": 1, "byteOffset": 0, "byteLength": s.len()})
         );
     }
 
     #[test]
-    fn a_missing_primitive_is_an_error_and_changes_nothing() {
+    fn a_missing_primitive_or_a_bad_stream_is_an_error_and_changes_nothing() {
+        let (s, levels) = stream();
         let mut root = doc();
         let before = root.clone();
         let mut bin = Vec::new();
-        assert!(attach(&mut root, 5, 0, b"x", &[], Placement::Glb { bin: &mut bin }).is_err());
+        assert!(attach(
+            &mut root,
+            5,
+            0,
+            &s,
+            &levels,
+            Placement::Glb { bin: &mut bin }
+        )
+        .is_err());
+        assert!(attach(&mut root, 1, 0, b"x", &[], Placement::Glb { bin: &mut bin }).is_err());
         assert_eq!(root, before);
         assert!(bin.is_empty());
     }

@@ -35,6 +35,10 @@ use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
 
 const INDEX_HTML: &str = include_str!("../web/index.html");
 const VIEWER_JS: &str = include_str!("../web/viewer.js");
+const LGPM_JS: &str = include_str!("../web/three/lgpm.js");
+/// meshoptimizer's decoder (npm `meshoptimizer`, MIT), which decodes the
+/// stream's columns.
+const MESHOPT_DECODER_JS: &str = include_str!("../web/meshopt_decoder.mjs");
 
 /// Bytes the page asks for per Range request unless `?chunk=` says
 /// otherwise: small enough that the bunny arrives in a few dozen steps.
@@ -387,6 +391,14 @@ fn respond(data: &ViewData, request: Request) -> std::io::Result<()> {
         "/" | "/index.html" => (INDEX_HTML.as_bytes().to_vec(), "text/html; charset=utf-8"),
         "/viewer.js" => (
             VIEWER_JS.as_bytes().to_vec(),
+            "text/javascript; charset=utf-8",
+        ),
+        "/three/lgpm.js" => (
+            LGPM_JS.as_bytes().to_vec(),
+            "text/javascript; charset=utf-8",
+        ),
+        "/meshopt_decoder.mjs" => (
+            MESHOPT_DECODER_JS.as_bytes().to_vec(),
             "text/javascript; charset=utf-8",
         ),
         "/info.json" => (data.info().to_string().into_bytes(), "application/json"),

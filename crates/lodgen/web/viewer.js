@@ -1,14 +1,16 @@
 // lodgen view: a WebGL2 viewer for the LODGEN_progressive split stream.
 //
 // Shows the base (coarsest) mesh as soon as the header and base have arrived,
-// fetches /stream.bin in chunks with HTTP Range requests and applies each
-// vertex-split record as soon as its bytes are there. A slider moves through
+// fetches /stream.bin in pieces with HTTP Range requests and applies each
+// chunk of vertex-split records (one per level) as soon as its bytes are there. A slider moves through
 // the decoded records (refine / coarsen), buttons jump to the MSFT_lod
 // levels, and "auto" picks the level from the projected screen coverage.
 //
-// The stream layout is docs/LODGEN_progressive.md; the decoder below mirrors
-// crates/lodgen-pm/src/stream.rs and yields the same f32 positions
-// (origin + q * step in double precision, rounded once to f32).
+// The stream layout is docs/LODGEN_progressive.md; the decoder (three/lgpm.js)
+// mirrors crates/lodgen-pm/src/progressive/stream/ and yields the same f32
+// positions; its columns are decoded by meshoptimizer's MeshoptDecoder
+// (meshopt_decoder.mjs, from the `meshoptimizer` npm package, MIT).
+// Records arrive chunk by chunk: one chunk per MSFT_lod level.
 //
 // A stream with wedges (header flag 2) also carries every corner's wedge and
 // every wedge's attribute values (NORMAL, TEXCOORD_0, COLOR_0, … as the
@@ -19,319 +21,8 @@
 // attributeHash(), channels(), setShading(mode), refineTo(k), applied(),
 // decoded(), complete(), info, history, levels(), pixelStats(),
 // setCamera(yaw, pitch, distanceFactor), error().
-"use strict";
-
-// ------------------------------------------------------------------ decoder
-
-const NEED_MORE = { needMore: true };
-
-class Reader {
-  constructor(bytes, pos, offset) {
-    this.b = bytes;
-    this.pos = pos;
-    this.offset = offset; // stream offset of bytes[0]
-  }
-  byte() {
-    if (this.pos >= this.b.length) throw NEED_MORE;
-    return this.b[this.pos++];
-  }
-  varint() {
-    let v = 0;
-    let mul = 1;
-    for (let i = 0; i < 8; i++) {
-      const b = this.byte();
-      v += (b & 0x7f) * mul;
-      if ((b & 0x80) === 0) return v;
-      mul *= 128;
-    }
-    throw new Error(`byte ${this.offset + this.pos}: varint too long`);
-  }
-  zz() {
-    const v = this.varint();
-    return v % 2 === 0 ? v / 2 : -(v + 1) / 2;
-  }
-  bounded(limit, what) {
-    const at = this.offset + this.pos;
-    const v = this.varint();
-    if (v > limit) throw new Error(`byte ${at}: ${what} ${v} exceeds ${limit}`);
-    return v;
-  }
-  f32() {
-    if (this.pos + 4 > this.b.length) throw NEED_MORE;
-    const v = new DataView(this.b.buffer, this.b.byteOffset + this.pos, 4).getFloat32(0, true);
-    this.pos += 4;
-    return v;
-  }
-}
-
-class StreamDecoder {
-  constructor() {
-    this.pending = new Uint8Array(0);
-    this.consumed = 0;
-    this.header = null;
-    this.baseReady = false;
-    this.records = []; // {v1, v0, p1, pm, p0, faces: Uint32Array, corners: Uint32Array (t*3+slot)}
-    // decode-side state: the mesh with every decoded record applied
-    this.q = null; // Uint32Array, 3 per vertex
-    this.nv = 0;
-    this.tri = null; // Uint32Array, 3 per triangle
-    this.nt = 0;
-    this.basePositions = null;
-    this.baseTri = null;
-  }
-
-  push(chunk) {
-    const merged = new Uint8Array(this.pending.length + chunk.length);
-    merged.set(this.pending, 0);
-    merged.set(chunk, this.pending.length);
-    this.pending = merged;
-    const before = this.records.length;
-    let r = new Reader(this.pending, 0, this.consumed);
-    try {
-      // header and base are taken in one piece each: on running out of
-      // bytes, nothing of them is consumed (r.pos goes back to 0)
-      if (!this.header) {
-        try {
-          this.header = this.parseHeader(r);
-        } catch (e) {
-          if (e === NEED_MORE) r.pos = 0;
-          throw e;
-        }
-        this.eat(r.pos);
-        r = new Reader(this.pending, 0, this.consumed);
-      }
-      if (!this.baseReady) {
-        try {
-          this.parseBase(r);
-        } catch (e) {
-          if (e === NEED_MORE) r.pos = 0;
-          throw e;
-        }
-        this.eat(r.pos);
-        r = new Reader(this.pending, 0, this.consumed);
-      }
-      const h = this.header;
-      while (this.records.length < h.splitCount) {
-        const mark = r.pos;
-        try {
-          this.parseRecord(r);
-        } catch (e) {
-          if (e === NEED_MORE) r.pos = mark;
-          throw e;
-        }
-      }
-      if (r.pos < r.b.length) throw new Error(`${r.b.length - r.pos} bytes follow the last record`);
-      if (this.nt !== h.totalTriangles) throw new Error("the records restore a different triangle count");
-      if (h.wedges && this.nw !== h.wedges.total) throw new Error("the records define a different wedge count");
-    } catch (e) {
-      if (e !== NEED_MORE) throw e;
-    }
-    this.eat(r.pos);
-    return this.records.length - before;
-  }
-
-  eat(n) {
-    this.consumed += n;
-    this.pending = this.pending.slice(n);
-  }
-
-  complete() {
-    return !!this.header && this.baseReady && this.records.length === this.header.splitCount &&
-      this.pending.length === 0 && (!this.header.wedges || this.nw === this.header.wedges.total);
-  }
-
-  parseHeader(r) {
-    const magic = [0x4c, 0x47, 0x50, 0x4d]; // "LGPM"
-    for (const m of magic) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
-    const version = r.byte();
-    if (version !== 1) throw new Error(`unsupported stream version ${version}`);
-    const flags = r.byte();
-    if (flags & ~3) throw new Error(`unknown flags ${flags}`);
-    const bits = r.byte();
-    if (bits < 1 || bits > 30) throw new Error(`grid bits ${bits}`);
-    const origin = [r.f32(), r.f32(), r.f32()];
-    const step = r.f32();
-    const max = 0xfffffffe;
-    const h = {
-      flags, bits, origin, step,
-      baseVertices: r.bounded(max, "base vertices"),
-      baseTriangles: r.bounded(max, "base triangles"),
-      splitCount: r.bounded(max, "split count"),
-      totalVertices: r.bounded(max, "total vertices"),
-      totalTriangles: r.bounded(max, "total triangles"),
-      levels: [],
-    };
-    if (h.totalVertices !== h.baseVertices + h.splitCount) throw new Error("inconsistent vertex counts");
-    if (h.totalTriangles < h.baseTriangles) throw new Error("inconsistent triangle counts");
-    const n = r.bounded(max, "level count");
-    for (let i = 0; i < n; i++) h.levels.push(r.bounded(h.splitCount, "level"));
-    h.wedges = null;
-    if (flags & 2) {
-      const total = r.bounded(max, "wedge count");
-      const groups = r.bounded(max, "group count");
-      if (groups === 0) throw new Error("zero wedge groups");
-      const nch = r.bounded(64, "channel count");
-      const channels = [];
-      let stride = 0;
-      for (let i = 0; i < nch; i++) {
-        const len = r.bounded(64, "channel name length");
-        const bytes = new Uint8Array(len);
-        for (let j = 0; j < len; j++) bytes[j] = r.byte();
-        const name = new TextDecoder("utf-8", { fatal: true }).decode(bytes);
-        if (!name) throw new Error("empty channel name");
-        const components = r.byte();
-        if (components < 1 || components > 16) throw new Error(`${components} components`);
-        channels.push({ name, components, offset: stride });
-        stride += components;
-      }
-      h.wedges = { total, groups, channels, stride };
-    }
-    return h;
-  }
-
-  // One wedge reference: 0 = a new wedge (group if several, then its values),
-  // k >= 1 = wedge count - k. New wedges go to `tmp` until the piece commits.
-  readWedge(r, tmp) {
-    const w = this.header.wedges;
-    const code = r.bounded(tmp.n, "wedge reference");
-    if (code > 0) return tmp.n - code;
-    if (tmp.n >= w.total) throw new Error(`more wedges than the ${w.total} announced`);
-    tmp.groups.push(w.groups > 1 ? r.bounded(w.groups - 1, "wedge group") : 0);
-    for (let i = 0; i < w.stride; i++) tmp.vals.push(r.f32());
-    return tmp.n++;
-  }
-
-  commitWedges(tmp) {
-    const w = this.header.wedges;
-    this.wvals.set(tmp.vals, this.nw * w.stride);
-    this.wgroups.set(tmp.groups, this.nw);
-    this.nw = tmp.n;
-  }
-
-  deq(qx, qy, qz, out, o) {
-    const h = this.header;
-    out[o] = Math.fround(h.origin[0] + qx * h.step);
-    out[o + 1] = Math.fround(h.origin[1] + qy * h.step);
-    out[o + 2] = Math.fround(h.origin[2] + qz * h.step);
-  }
-
-  coord(v) {
-    if (!(v >= 0 && v <= 2 ** this.header.bits - 1)) throw new Error(`coordinate ${v} outside the grid`);
-    return v;
-  }
-
-  parseBase(r) {
-    const h = this.header;
-    const q = new Uint32Array(h.totalVertices * 3);
-    const prev = [0, 0, 0];
-    for (let v = 0; v < h.baseVertices; v++) {
-      for (let a = 0; a < 3; a++) {
-        prev[a] += r.zz();
-        q[v * 3 + a] = this.coord(prev[a]);
-      }
-    }
-    const tri = new Uint32Array(h.totalTriangles * 3);
-    let p = 0;
-    for (let i = 0; i < h.baseTriangles * 3; i++) {
-      p += r.zz();
-      if (p < 0 || p >= h.baseVertices) throw new Error(`base corner ${p} out of range`);
-      tri[i] = p;
-    }
-    let tmp = null;
-    if (h.wedges) {
-      tmp = { n: 0, vals: [], groups: [] };
-      this.baseCW = new Uint32Array(h.baseTriangles * 3);
-      for (let i = 0; i < h.baseTriangles * 3; i++) this.baseCW[i] = this.readWedge(r, tmp);
-      this.wvals = new Float32Array(h.wedges.total * h.wedges.stride);
-      this.wgroups = new Uint32Array(h.wedges.total);
-      this.nw = 0;
-      this.cw = new Uint32Array(h.totalTriangles * 3);
-      this.cw.set(this.baseCW, 0);
-      this.commitWedges(tmp);
-    }
-    // complete: commit
-    this.q = q;
-    this.tri = tri;
-    this.baseTri = tri.slice(0, h.baseTriangles * 3);
-    this.nv = h.baseVertices;
-    this.nt = h.baseTriangles;
-    this.basePositions = new Float32Array(h.baseVertices * 3);
-    for (let v = 0; v < h.baseVertices; v++) this.deq(q[3 * v], q[3 * v + 1], q[3 * v + 2], this.basePositions, 3 * v);
-    this.baseReady = true;
-  }
-
-  parseRecord(r) {
-    const h = this.header;
-    const v0 = this.nv;
-    const head = r.varint();
-    let nf = head % 4;
-    if (nf === 3) nf += r.bounded(65536, "face count");
-    const nc = Math.floor(head / 4);
-    if (this.nt + nf > h.totalTriangles) throw new Error("more triangles than announced");
-    if (nc > 3 * (this.nt + nf)) throw new Error("too many corner edits");
-    if (v0 === 0) throw new Error("nothing to split");
-    const v1 = v0 - 1 - r.bounded(v0 - 1, "v1 distance");
-    const q = this.q;
-    const q1 = [0, 0, 0], q0 = [0, 0, 0];
-    for (let a = 0; a < 3; a++) q1[a] = this.coord(q[3 * v1 + a] + r.zz());
-    for (let a = 0; a < 3; a++) q0[a] = this.coord(q1[a] + r.zz());
-    const faces = new Uint32Array(nf * 3);
-    for (let i = 0; i < nf * 3; i++) {
-      const code = r.bounded(v0 + 1, "face corner code");
-      faces[i] = code === 0 ? v0 : code === 1 ? v1 : v0 - (code - 1);
-    }
-    const count = this.nt + nf;
-    const corners = new Uint32Array(nc);
-    let prev = count;
-    for (let i = 0; i < nc; i++) {
-      const code = r.varint();
-      const gap = Math.floor(code / 4), slot = code % 4;
-      if (slot > 2 || gap >= prev) throw new Error("corner edit out of range");
-      const t = prev - 1 - gap;
-      corners[nc - 1 - i] = t * 3 + slot;
-      prev = t + 1;
-    }
-    let wfaces = null, wafter = null, wbefore = null, tmp = null;
-    if (h.wedges) {
-      tmp = { n: this.nw, vals: [], groups: [] };
-      wfaces = new Uint32Array(nf * 3);
-      for (let i = 0; i < nf * 3; i++) wfaces[i] = this.readWedge(r, tmp);
-      wafter = new Uint32Array(nc);
-      wbefore = new Uint32Array(nc);
-      for (let i = 0; i < nc; i++) wafter[nc - 1 - i] = this.readWedge(r, tmp);
-    }
-    if (h.flags & 1) r.f32();
-    // validate corners against the decode-side mesh (faces appended)
-    for (let i = 0; i < nc; i++) {
-      const c = corners[i];
-      const value = c < this.nt * 3 ? this.tri[c] : faces[c - this.nt * 3];
-      if (value !== v1 || (i > 0 && corners[i - 1] === c)) throw new Error(`corner ${c} does not hold v1`);
-    }
-    // commit
-    const rec = { v1, v0, p1: new Float32Array(3), pm: new Float32Array(3), p0: new Float32Array(3), faces, corners,
-      wfaces, wafter, wbefore };
-    if (h.wedges) {
-      this.cw.set(wfaces, this.nt * 3);
-      for (let i = 0; i < nc; i++) {
-        wbefore[i] = this.cw[corners[i]];
-        this.cw[corners[i]] = wafter[i];
-      }
-      this.commitWedges(tmp);
-    }
-    this.deq(q[3 * v1], q[3 * v1 + 1], q[3 * v1 + 2], rec.pm, 0);
-    this.deq(q1[0], q1[1], q1[2], rec.p1, 0);
-    this.deq(q0[0], q0[1], q0[2], rec.p0, 0);
-    for (let a = 0; a < 3; a++) {
-      q[3 * v1 + a] = q1[a];
-      q[3 * v0 + a] = q0[a];
-    }
-    this.tri.set(faces, this.nt * 3);
-    this.nt += nf;
-    for (const c of corners) this.tri[c] = v0;
-    this.nv += 1;
-    this.records.push(rec);
-  }
-}
+import { MeshoptDecoder } from "./meshopt_decoder.mjs";
+import { StreamDecoder } from "./three/lgpm.js";
 
 // The displayed mesh: base + records[0..applied], refined and coarsened in place.
 class Display {
@@ -505,7 +196,7 @@ void main() {
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
 const state = {
-  info: null, dec: new StreamDecoder(), disp: null, gl: null, prog: null, vao: null, pbuf: null, ibuf: null,
+  info: null, dec: new StreamDecoder(MeshoptDecoder), disp: null, gl: null, prog: null, vao: null, pbuf: null, ibuf: null,
   uploadedV: 0, uploadedT: 0, follow: true, auto: false, culled: false, shading: 0, abufs: null,
   yaw: 0.6, pitch: 0.25, distFactor: 2.6, center: [0, 0, 0], radius: 1, history: [], error: null, bytes: 0,
 };
@@ -751,6 +442,7 @@ function setAuto(on) {
 
 async function load() {
   initGL();
+  await MeshoptDecoder.ready;
   const info = await (await fetch("info.json")).json();
   state.info = info;
   $("name").textContent = info.name;
