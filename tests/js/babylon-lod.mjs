@@ -19,30 +19,11 @@
 // counts. Fails (exit 1) on any mismatch, page error, console error, failed
 // request, or after the timeout (default 90 s). Exit 2 on bad usage.
 
-import crypto from 'node:crypto';
 import fs from 'node:fs';
-import http from 'node:http';
 import os from 'node:os';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import * as esbuild from 'esbuild';
 import { chromium } from 'playwright-core';
-
-const HERE = path.dirname(fileURLToPath(import.meta.url));
-const CHROMIUM = process.env.LODGEN_CHROMIUM || '/usr/bin/chromium';
-const CHROMIUM_ARGS = [
-  '--headless',
-  '--no-sandbox',
-  '--disable-gpu',
-  '--no-first-run',
-  '--disable-background-networking',
-  '--disable-component-update',
-  '--disable-sync',
-  '--disable-quic',
-  // WebGL through SwiftShader (software) since the GPU is disabled.
-  '--use-angle=swiftshader',
-  '--enable-unsafe-swiftshader',
-];
+import { CHROMIUM, CHROMIUM_ARGS, bundle, startServer } from './browser.mjs';
 
 function usage(msg) {
   console.error(
@@ -142,77 +123,8 @@ function pairUp(report, chains) {
   return { how: 'by order (names did not match one-to-one)', pairs: report.meshes.map((m, i) => [m, chains[i]]) };
 }
 
-function startServer(routes, requests) {
-  const server = http.createServer((req, res) => {
-    const u = new URL(req.url, 'http://127.0.0.1');
-    const route = routes[u.pathname];
-    const log = { method: req.method, path: u.pathname, range: req.headers.range ?? null, status: 0 };
-    requests.push(log);
-    if (!route) {
-      log.status = u.pathname === '/favicon.ico' ? 204 : 404;
-      res.writeHead(log.status).end();
-      return;
-    }
-    const body = route.body;
-    const headers = { 'Content-Type': route.type, 'Cache-Control': 'no-store', 'Accept-Ranges': 'bytes' };
-    const m = /^bytes=(\d*)-(\d*)$/.exec(req.headers.range ?? '');
-    if (m && (m[1] !== '' || m[2] !== '')) {
-      let start;
-      let end;
-      if (m[1] === '') {
-        start = Math.max(0, body.length - Number(m[2]));
-        end = body.length - 1;
-      } else {
-        start = Number(m[1]);
-        end = m[2] === '' ? body.length - 1 : Math.min(Number(m[2]), body.length - 1);
-      }
-      if (start > end || start >= body.length) {
-        log.status = 416;
-        res.writeHead(416, { 'Content-Range': `bytes */${body.length}` }).end();
-        return;
-      }
-      log.status = 206;
-      res.writeHead(206, { ...headers, 'Content-Range': `bytes ${start}-${end}/${body.length}`, 'Content-Length': end - start + 1 });
-      res.end(req.method === 'HEAD' ? undefined : body.subarray(start, end + 1));
-      return;
-    }
-    log.status = 200;
-    res.writeHead(200, { ...headers, 'Content-Length': body.length });
-    res.end(req.method === 'HEAD' ? undefined : body);
-  });
-  return new Promise((resolve, reject) => {
-    server.once('error', reject);
-    server.listen(0, '127.0.0.1', () => resolve(server));
-  });
-}
-
-// The bundle is cached in node_modules/.cache, keyed by the page source and
-// the installed package versions (npm ci empties node_modules, hence the cache).
-async function bundlePage() {
-  const entry = path.join(HERE, 'babylon-lod-page.js');
-  const key = crypto
-    .createHash('sha256')
-    .update(fs.readFileSync(entry))
-    .update(fs.readFileSync(path.join(HERE, 'package-lock.json')))
-    .digest('hex')
-    .slice(0, 16);
-  const cached = path.join(HERE, 'node_modules', '.cache', 'lodgen', `babylon-lod-page-${key}.js`);
-  if (fs.existsSync(cached)) return fs.readFileSync(cached);
-  const r = await esbuild.build({
-    entryPoints: [entry],
-    absWorkingDir: HERE,
-    bundle: true,
-    format: 'esm',
-    target: 'es2020',
-    write: false,
-    logLevel: 'silent',
-  });
-  const js = Buffer.from(r.outputFiles[0].contents);
-  fs.mkdirSync(path.dirname(cached), { recursive: true });
-  fs.writeFileSync(`${cached}.tmp${process.pid}`, js);
-  fs.renameSync(`${cached}.tmp${process.pid}`, cached);
-  return js;
-}
+// The page bundle (cached in node_modules/.cache/lodgen, see browser.mjs).
+const bundlePage = () => bundle('babylon-lod-page.js');
 
 const HTML = `<!doctype html>
 <html><head><meta charset="utf-8"><title>lodgen MSFT_lod check</title>

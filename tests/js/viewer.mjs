@@ -25,26 +25,7 @@
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
-
-const HERE = path.dirname(fileURLToPath(import.meta.url));
-const CHROMIUM = process.env.LODGEN_CHROMIUM || '/usr/bin/chromium';
-const CHROMIUM_ARGS = [
-  '--headless',
-  '--no-sandbox',
-  '--disable-gpu',
-  '--no-first-run',
-  '--disable-background-networking',
-  '--disable-component-update',
-  '--disable-sync',
-  '--disable-quic',
-  // WebGL2 through SwiftShader (software) since the GPU is disabled
-  '--use-angle=swiftshader',
-  '--enable-unsafe-swiftshader',
-];
-/// Luminance variance below which a screenshot counts as blank.
-const MIN_VARIANCE = 20;
+import { HERE, MIN_VARIANCE, checker, launch } from './browser.mjs';
 
 function usage(msg) {
   console.error(
@@ -97,11 +78,7 @@ function startServer(bin, file) {
   });
 }
 
-const failures = [];
-function check(cond, what) {
-  if (!cond) failures.push(what);
-  console.log(`${cond ? 'ok  ' : 'FAIL'} ${what}`);
-}
+const { check, failures } = checker();
 
 async function main() {
   const o = parseArgs(process.argv.slice(2));
@@ -115,13 +92,10 @@ async function main() {
     o.url = server.url;
   }
   fs.mkdirSync(o.out, { recursive: true });
-  const browser = await chromium.launch({ executablePath: CHROMIUM, args: CHROMIUM_ARGS, headless: true });
+  const errors = [];
+  const browser = await launch(errors, { viewport: { width: 800, height: 600 } });
   try {
-    const page = await browser.newPage({ viewport: { width: 800, height: 600 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(`page error: ${e.message}`));
-    page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
-    page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}`));
+    const page = browser.page;
     const rangeRequests = [];
     page.on('request', (r) => { if (r.url().includes('stream.bin')) rangeRequests.push(r.headers()['range']); });
 

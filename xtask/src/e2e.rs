@@ -21,7 +21,7 @@ const RATIOS: [f64; 3] = [0.5, 0.1, 0.02];
 
 /// The OBJ of `id` (`bunny`, `bunny-1m`, `bunny-4m`), written once under
 /// `target/bench-meshes/`.
-fn mesh_file(id: &str) -> Result<PathBuf> {
+pub(crate) fn mesh_file(id: &str) -> Result<PathBuf> {
     let bunny = crate::shared_assets()?.join("bunny.obj");
     if id == "bunny" {
         return Ok(bunny);

@@ -11,6 +11,7 @@ mod fuzz;
 mod golden;
 mod layout;
 mod render;
+mod stream_bench;
 mod test;
 
 const USAGE: &str = "usage: cargo xtask <task> [args]
@@ -24,6 +25,9 @@ tasks:
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
                           then end to end (the lodgen binary vs a meshopt program; + 4.4M)
+  stream-bench [--quick] [--runs N]
+                          time to first pixel / full detail, progressive vs plain meshopt file, three.js in
+                          headless Chromium over a throttled 10 Mbit/s, 50 ms line (bunny, 1.1M bunny)
   compare [--meshes bunny,cow,fandisk] [--no-render]
                           every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
 
@@ -47,6 +51,7 @@ fn main() -> anyhow::Result<()> {
         "attributes" => attributes::run(rest),
         "bench-child" => bench::child(rest),
         "compare" => compare::run(rest),
+        "stream-bench" => stream_bench::run(rest),
         "layout" => layout::run(rest),
         "help" | "-h" | "--help" => {
             println!("{USAGE}");

@@ -12,7 +12,8 @@
 //
 // Positions come out as grid points (d.q, Uint16Array, 3 per vertex) and as
 // f32 (center + (q - s) / s * half in double precision, rounded once).
-// `corners` are corner indices t * 3 + slot.
+// `corners` are corner indices t * 3 + slot; p1 / pm / p0, faces and corners
+// are plain arrays.
 
 const FACE_ESCAPE = 255;
 const RING_CODES = 42;
@@ -335,9 +336,13 @@ export class StreamDecoder {
   }
 
   ring(v) {
-    const set = new Set();
-    for (const t of this.fans[v]) for (let i = 0; i < 3; i++) { const u = this.tri[3 * t + i]; if (u !== v) set.add(u); }
-    return [...set].sort((a, b) => a - b);
+    const r = [];
+    for (const t of this.fans[v]) for (let i = 0; i < 3; i++) { const u = this.tri[3 * t + i]; if (u !== v) r.push(u); }
+    r.sort((a, b) => a - b);
+    let n = 0;
+    for (let i = 0; i < r.length; i++) if (i === 0 || r[i] !== r[i - 1]) r[n++] = r[i];
+    r.length = n;
+    return r;
   }
 
   // wedge references of a chunk: refs, groups, values; next() = wedge id
@@ -406,7 +411,7 @@ export class StreamDecoder {
       if (c > 255) throw new Error("face code over 255");
       cs.push(c);
     }
-    const faces = new Uint32Array(3 * nf);
+    const faces = new Array(3 * nf);
     cs.forEach((c, k) => {
       if (c === FACE_ESCAPE) {
         for (let j = 0; j < 3; j++) {
@@ -455,8 +460,8 @@ export class StreamDecoder {
       const f0 = this.fans[v0];
       if (!f0.includes(t)) { f0.push(t); f0.sort((a, b) => a - b); }
     }
-    const rec = { v1, v0, p1: new Float32Array(3), pm: new Float32Array(3), p0: new Float32Array(3), faces,
-      corners: Uint32Array.from(corners), wfaces: null, wafter: null, wbefore: null };
+    const rec = { v1, v0, p1: [0, 0, 0], pm: [0, 0, 0], p0: [0, 0, 0], faces, corners,
+      wfaces: null, wafter: null, wbefore: null };
     if (wc) {
       rec.wfaces = new Uint32Array(3 * nf);
       for (let k = 0; k < 3 * nf; k++) rec.wfaces[k] = wc.next();
@@ -505,9 +510,12 @@ export class StreamDecoder {
     for (const r of recs) {
       this.deq(q, r.v1, r.p1, 0);
       this.deq(q, r.v0, r.p0, 0);
-      r.pm.set(this.cur.subarray(3 * r.v1, 3 * r.v1 + 3));
-      this.cur.set(r.p1, 3 * r.v1);
-      this.cur.set(r.p0, 3 * r.v0);
+      const c = this.cur;
+      for (let a = 0; a < 3; a++) {
+        r.pm[a] = c[3 * r.v1 + a];
+        c[3 * r.v1 + a] = r.p1[a];
+        c[3 * r.v0 + a] = r.p0[a];
+      }
     }
   }
 }

@@ -1,0 +1,367 @@
+// lodgen-three: stream a lodgen GLB's LODGEN_progressive vertex splits into
+// three.js (docs/LODGEN_progressive.md).
+//
+//   import { loadProgressive, coverageDistance } from "lodgen-three";
+//   import { MeshoptDecoder } from "meshoptimizer";
+//   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
+//   const p = await loadProgressive("model.glb", { loader, meshoptDecoder: MeshoptDecoder });
+//   scene.add(p.gltf.scene);                    // the coarsest level, at once
+//   p.addEventListener("level", (e) => render()); // e.level (finest = 0), e.triangles
+//   await p.refine();                           // or p.refine(level): stop at a level
+//
+// loadProgressive fetches, by HTTP range requests, the GLB header and JSON,
+// then only the coarsest MSFT_lod level's bytes, and lets GLTFLoader parse
+// that (a GLTFLoader plugin finds the primitive carrying LODGEN_progressive
+// and gives it a BufferGeometry sized for the finest level). `refine` then
+// fetches the stream chunk by chunk (one chunk per level) and applies each
+// to that geometry with update ranges (only the changed vertices and
+// indices are uploaded), dispatching a "level" event per level.
+// `refineForScreen(camera, renderer)` refines to the level the file's
+// MSFT_screencoverage asks for at the object's current size on screen.
+//
+// coverageDistance({ camera, radius }) is a `calculateDistance` hook for
+// three-gltf-extensions' MSFT_lod plugin that honours MSFT_screencoverage.
+
+import {
+  BufferAttribute,
+  BufferGeometry,
+  EventDispatcher,
+  Sphere,
+  Vector3,
+} from "three";
+import { StreamDecoder, parseHeader } from "./lgpm.js";
+
+const EXTENSION = "LODGEN_progressive";
+
+// Screen coverage as MSFT_lod defines it (projected bounding-sphere area /
+// screen area) of a sphere of `radius` at `distance` from a perspective camera.
+export function screenCoverage(camera, radius, distance) {
+  const r = radius / (Math.max(distance, 1e-12) * Math.tan((camera.fov * Math.PI) / 360));
+  return Math.min(1, (Math.PI * r * r) / (4 * camera.aspect));
+}
+
+// The distance at which a sphere of `radius` covers `coverage` of the screen.
+export function distanceForCoverage(camera, radius, coverage) {
+  const r = Math.sqrt((4 * camera.aspect * coverage) / Math.PI);
+  return radius / (Math.tan((camera.fov * Math.PI) / 360) * r);
+}
+
+// calculateDistance hook for three-gltf-extensions' GLTFLodExtension: level
+// L (finest = 0) takes over where the coverage drops below the finer level's
+// MSFT_screencoverage value, for a bounding sphere of `radius` seen by
+// `camera` (perspective; the distances are computed once, for its current
+// fov and aspect).
+export function coverageDistance({ camera, radius }) {
+  return (level, lowestLevel, coverages) => {
+    if (level === 0) return 0;
+    const c = coverages[level - 1];
+    if (!(c > 0)) return Infinity;
+    return distanceForCoverage(camera, radius, c);
+  };
+}
+
+async function fetchRange(url, start, end, fetchOptions) {
+  const resp = await fetch(url, { ...fetchOptions, headers: { Range: `bytes=${start}-${end - 1}` } });
+  if (resp.status !== 206 && resp.status !== 200) throw new Error(`${url}: HTTP ${resp.status}`);
+  const bytes = new Uint8Array(await resp.arrayBuffer());
+  // a server that ignores ranges sends the whole file
+  return resp.status === 200 ? bytes.subarray(start, end) : bytes;
+}
+
+// GLB header + JSON: {json, binStart, binLength}, in one range request when
+// the JSON fits the first `guess` bytes.
+async function fetchGlbJson(url, fetchOptions, guess = 16384) {
+  let head = await fetchRange(url, 0, guess, fetchOptions);
+  const dv = new DataView(head.buffer, head.byteOffset, Math.min(head.length, 20));
+  if (head.length < 20 || dv.getUint32(0, true) !== 0x46546c67) throw new Error(`${url}: not a GLB`);
+  const jsonLength = dv.getUint32(12, true);
+  if (head.length < 28 + jsonLength) head = await fetchRange(url, 0, 28 + jsonLength, fetchOptions);
+  const json = JSON.parse(new TextDecoder().decode(head.subarray(20, 20 + jsonLength)));
+  const tail = new DataView(head.buffer, head.byteOffset + 20 + jsonLength, 8);
+  return { json, jsonLength, binStart: 20 + jsonLength + 8, binLength: tail.getUint32(0, true) };
+}
+
+// The extension, its mesh, and the MSFT_lod chain node that shows the finest level.
+function findExtension(json) {
+  for (let m = 0; m < (json.meshes || []).length; m++) {
+    const prims = json.meshes[m].primitives || [];
+    for (let p = 0; p < prims.length; p++) {
+      const ext = prims[p].extensions && prims[p].extensions[EXTENSION];
+      if (!ext) continue;
+      const nodes = json.nodes || [];
+      let lodNode = -1, chain = null;
+      nodes.forEach((n, i) => {
+        const lod = n.extensions && n.extensions.MSFT_lod;
+        if (!lod) return;
+        const ids = [i, ...lod.ids];
+        if (ids.some((id) => nodes[id] && nodes[id].mesh === m)) { lodNode = i; chain = ids; }
+      });
+      return { mesh: m, primitive: p, ext, lodNode, chain };
+    }
+  }
+  return null;
+}
+
+// Byte range [lo, hi) of buffer 0 holding everything `mesh`'s primitives read.
+function meshRange(json, mesh) {
+  let lo = Infinity, hi = 0;
+  const view = (v) => {
+    const bv = json.bufferViews[v];
+    const mo = bv.extensions && bv.extensions.EXT_meshopt_compression;
+    const src = mo && json.buffers[mo.buffer].uri === undefined ? mo : bv;
+    if (src.buffer !== 0) return;
+    lo = Math.min(lo, src.byteOffset || 0);
+    hi = Math.max(hi, (src.byteOffset || 0) + src.byteLength);
+  };
+  for (const prim of json.meshes[mesh].primitives) {
+    const accessors = [...Object.values(prim.attributes), prim.indices].filter((a) => a !== undefined);
+    for (const a of accessors) if (json.accessors[a].bufferView !== undefined) view(json.accessors[a].bufferView);
+  }
+  return lo < hi ? [lo, hi] : [0, 0];
+}
+
+function glb(json, bin) {
+  let jsonBytes = new TextEncoder().encode(JSON.stringify(json));
+  const pad = (n) => (4 - (n % 4)) % 4;
+  const jl = jsonBytes.length + pad(jsonBytes.length);
+  const bl = bin.length + pad(bin.length);
+  const out = new Uint8Array(12 + 8 + jl + 8 + bl);
+  const dv = new DataView(out.buffer);
+  dv.setUint32(0, 0x46546c67, true);
+  dv.setUint32(4, 2, true);
+  dv.setUint32(8, out.length, true);
+  dv.setUint32(12, jl, true);
+  dv.setUint32(16, 0x4e4f534a, true);
+  out.set(jsonBytes, 20);
+  out.fill(0x20, 20 + jsonBytes.length, 20 + jl);
+  dv.setUint32(20 + jl, bl, true);
+  dv.setUint32(24 + jl, 0x004e4942, true);
+  out.set(bin, 28 + jl);
+  return out.buffer;
+}
+
+// The GLTFLoader plugin: remembers the three.js Mesh of the primitive that
+// carries the extension.
+class LodgenProgressivePlugin {
+  constructor(parser, found, onMesh) {
+    this.name = EXTENSION;
+    this.parser = parser;
+    this.found = found;
+    this.onMesh = onMesh;
+  }
+  afterRoot(gltf) {
+    const { mesh, primitive } = this.found;
+    let target = null;
+    gltf.scene.traverse((o) => {
+      const a = this.parser.associations.get(o);
+      if (o.isMesh && a && a.meshes === mesh && (a.primitives === undefined || a.primitives === primitive)) target = target || o;
+    });
+    // the stream holds every primitive of the mesh: hide the others
+    gltf.scene.traverse((o) => {
+      const a = this.parser.associations.get(o);
+      if (o.isMesh && o !== target && a && a.meshes === mesh) o.visible = false;
+    });
+    this.onMesh(target);
+    return null;
+  }
+}
+
+// A loaded progressive GLB: the scene (coarsest level) and the stream.
+export class ProgressiveMesh extends EventDispatcher {
+  constructor({ url, fetchOptions, meshoptDecoder, json, binStart, found }) {
+    super();
+    this.url = url;
+    this.fetchOptions = fetchOptions;
+    this.found = found;
+    this.json = json;
+    this.binStart = binStart;
+    this.decoder = new StreamDecoder(meshoptDecoder);
+    const bv = json.bufferViews[found.ext.bufferView];
+    this.streamStart = binStart + (bv.byteOffset || 0);
+    this.streamLength = bv.byteLength;
+    this.chunkEnds = found.ext.chunks || null;
+    this.levels = found.ext.levels; // records per level, finest first
+    this.applied = 0; // records applied to the geometry
+    this.mesh = null;
+    this.fetched = 0; // stream chunks fetched
+  }
+
+  // Fetch and decode chunk 0 (header + base mesh) and set up the geometry.
+  async start() {
+    if (!this.chunkEnds) {
+      const head = await fetchRange(this.url, this.streamStart, this.streamStart + Math.min(this.streamLength, 4096), this.fetchOptions);
+      this.chunkEnds = parseHeader(head).chunkEnds;
+    }
+    await this.fetchChunk(0);
+    const d = this.decoder, h = d.header;
+    const prim = this.json.meshes[this.found.mesh].primitives[this.found.primitive];
+    const acc = this.json.accessors[prim.attributes.POSITION];
+    // same space as the level's POSITION: normalized i16 grid points
+    // (KHR_mesh_quantization, q - s) or floats
+    this.quantized = acc.componentType === 5122 && acc.normalized && h.bits === 16;
+    const g = new BufferGeometry();
+    const pos = this.quantized ? new Int16Array(h.totalVertices * 3) : new Float32Array(h.totalVertices * 3);
+    g.setAttribute("position", new BufferAttribute(pos, 3, this.quantized));
+    g.setIndex(new BufferAttribute(new Uint32Array(Math.max(3, h.totalTriangles * 3)), 1));
+    g.attributes.position.setUsage(35048); // DYNAMIC_DRAW
+    g.index.setUsage(35048);
+    this.geometry = g;
+    this.writeVertices(0, h.baseVertices);
+    g.index.array.set(d.baseTri, 0);
+    this.nt = h.baseTriangles;
+    this.finishUpdate(0, 0, 0, h.baseTriangles * 3);
+    if (this.mesh) {
+      this.mesh.geometry.dispose();
+      this.mesh.geometry = g;
+    }
+    this.dispatchEvent({ type: "level", level: this.levels.length - 1, records: 0, triangles: this.nt });
+  }
+
+  writeVertices(from, to) {
+    const d = this.decoder, h = d.header, a = this.geometry.attributes.position.array, s = h.scale;
+    if (this.quantized) for (let i = 3 * from; i < 3 * to; i++) a[i] = d.q[i] - s;
+    else for (let v = from; v < to; v++) d.deq(d.q, v, a, 3 * v);
+  }
+
+  finishUpdate(vFrom, vTo, iFrom, iTo) {
+    const g = this.geometry, p = g.attributes.position;
+    p.clearUpdateRanges();
+    g.index.clearUpdateRanges();
+    if (vTo > vFrom) p.addUpdateRange(3 * vFrom, 3 * (vTo - vFrom));
+    if (iTo > iFrom) g.index.addUpdateRange(iFrom, iTo - iFrom);
+    p.needsUpdate = true;
+    g.index.needsUpdate = true;
+    g.setDrawRange(0, 3 * this.nt);
+    g.computeVertexNormals();
+    g.computeBoundingSphere();
+  }
+
+  // The bytes of stream chunk `i` (fetched once; requests run in parallel).
+  chunkBytes(i) {
+    this.requests = this.requests || [];
+    if (!this.requests[i]) {
+      const start = i === 0 ? 0 : this.chunkEnds[i - 1];
+      this.requests[i] = fetchRange(this.url, this.streamStart + start, this.streamStart + this.chunkEnds[i], this.fetchOptions);
+    }
+    return this.requests[i];
+  }
+
+  async fetchChunk(i) {
+    this.decoder.push(await this.chunkBytes(i));
+    this.fetched = i + 1;
+  }
+
+  // Apply every decoded record up to `k` to the geometry.
+  applyTo(k) {
+    const d = this.decoder, recs = d.records, idx = this.geometry.index.array;
+    if (k <= this.applied) return;
+    let vLo = Infinity, vHi = 0, iLo = Infinity, iHi = 0;
+    for (let i = this.applied; i < k; i++) {
+      const r = recs[i];
+      vLo = Math.min(vLo, r.v1);
+      vHi = Math.max(vHi, r.v0 + 1);
+      idx.set(r.faces, 3 * this.nt);
+      iLo = Math.min(iLo, 3 * this.nt);
+      this.nt += r.faces.length / 3;
+      for (const c of r.corners) { idx[c] = r.v0; iLo = Math.min(iLo, c); }
+      iHi = 3 * this.nt;
+    }
+    // vertices: grid points at the chunk's end (the decoder's q)
+    this.writeVertices(vLo, vHi);
+    this.applied = k;
+    this.finishUpdate(vLo, vHi, iLo, iHi);
+  }
+
+  // The level (finest = 0) whose records are all applied.
+  level() {
+    let best = this.levels.length - 1;
+    this.levels.forEach((k, i) => { if (k <= this.applied && i < best) best = i; });
+    return best;
+  }
+
+  // Refine up to MSFT_lod level `level` (finest = 0; default: the finest),
+  // fetching the chunks that hold it; a "level" event per level reached.
+  async refine(level = 0) {
+    const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
+    const h = this.decoder.header;
+    // ask for every chunk up to the level at once: the latencies overlap
+    for (let i = this.fetched; i < h.chunks.length && (i === 0 || h.chunks[i - 1].records < want); i++) this.chunkBytes(i);
+    while (this.applied < want) {
+      const i = h.chunks.findIndex((c) => c.records > this.applied);
+      if (this.fetched <= i) await this.fetchChunk(i);
+      const k = Math.min(want, h.chunks[i].records);
+      this.applyTo(k);
+      const lv = this.levels.indexOf(k);
+      this.dispatchEvent({ type: "level", level: lv, records: k, triangles: this.nt });
+    }
+    return this.level();
+  }
+
+  // Refine to the level MSFT_screencoverage asks for at the mesh's current
+  // projected size (the level is never coarsened: the finer data stays).
+  async refineForScreen(camera) {
+    const coverages = this.screenCoverages();
+    if (!coverages || !this.mesh) return this.refine(0);
+    const sphere = new Sphere().copy(this.geometry.boundingSphere).applyMatrix4(this.mesh.matrixWorld);
+    const d = camera.getWorldPosition(new Vector3()).distanceTo(sphere.center);
+    const c = screenCoverage(camera, sphere.radius, d);
+    let level = coverages.findIndex((x) => c >= x);
+    if (level < 0) level = this.levels.length - 1;
+    return this.refine(level);
+  }
+
+  screenCoverages() {
+    const n = this.found.lodNode;
+    const node = n >= 0 ? this.json.nodes[n] : null;
+    return node && node.extras && node.extras.MSFT_screencoverage;
+  }
+}
+
+// Load a lodgen GLB progressively (see the top of this file). Options:
+// `loader` (a GLTFLoader, with its MeshoptDecoder set when the file uses
+// EXT_meshopt_compression), `meshoptDecoder` (awaited `.ready`),
+// `fetchOptions` (passed to fetch), `prefetch` (a level, 0 = finest: request
+// the stream up to it right away, in parallel with the coarse level, when
+// you will refine to it anyway). Returns the ProgressiveMesh with `.gltf`
+// holding the coarsest level; a file without the extension is loaded whole
+// by `loader` (`.gltf` set, nothing to refine).
+export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch }) {
+  await meshoptDecoder.ready;
+  const { json, binStart, binLength } = await fetchGlbJson(url, fetchOptions);
+  const found = findExtension(json);
+  if (!found) {
+    const gltf = await loader.loadAsync(url);
+    return Object.assign(new EventDispatcher(), { gltf, refine: async () => 0, levels: [] });
+  }
+  const coarseJson = structuredClone(json);
+  // show the coarsest mesh where the MSFT_lod chain shows its finest
+  if (found.lodNode >= 0) {
+    const node = coarseJson.nodes[found.lodNode];
+    node.mesh = found.mesh;
+    delete node.extensions.MSFT_lod;
+  }
+  const [lo, hi] = meshRange(json, found.mesh);
+  const bin = new Uint8Array(binLength);
+  const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found });
+  // the coarse level first: on one line, responses come in request order
+  const coarse = hi > lo ? fetchRange(url, binStart + lo, binStart + hi, fetchOptions) : null;
+  if (p.chunkEnds) {
+    // in parallel with the coarse level: chunk 0, and with `prefetch` the
+    // chunks up to that level (chunk i ≥ 1 ends at the i-th level count)
+    const want = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
+    const ends = [...new Set(p.levels.filter((k) => k > 0))].sort((a, b) => a - b);
+    const n = 1 + ends.filter((e) => e <= want).length;
+    for (let i = 0; i < Math.min(n, p.chunkEnds.length); i++) p.chunkBytes(i);
+  }
+  if (coarse) bin.set(await coarse, lo);
+  const plugin = (parser) => new LodgenProgressivePlugin(parser, found, (m) => { p.mesh = m; });
+  loader.register(plugin);
+  try {
+    p.gltf = await loader.parseAsync(glb(coarseJson, bin), "");
+  } finally {
+    loader.unregister(plugin);
+  }
+  p.coarseTriangles = json.accessors[json.meshes[found.mesh].primitives[found.primitive].indices].count / 3;
+  await p.start();
+  return p;
+}

@@ -1,0 +1,149 @@
+// The page three-lod.mjs and stream-bench.mjs drive (bundled by esbuild):
+// three.js from npm, GLTFLoader + MeshoptDecoder, lodgen's three.js loader
+// (crates/lodgen/web/three) and three-gltf-extensions' MSFT_lod plugin.
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { MeshoptDecoder } from 'meshoptimizer';
+import GLTFLodExtension from 'three-gltf-extensions/loaders/MSFT_lod/MSFT_lod.js';
+import { loadProgressive, coverageDistance, distanceForCoverage } from '../../crates/lodgen/web/three/index.js';
+
+const canvas = document.getElementById('c');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+renderer.setSize(canvas.width, canvas.height, false);
+const camera = new THREE.PerspectiveCamera(45, canvas.width / canvas.height, 0.001, 1e6);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x1b1d22);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x334455, 2.5));
+const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+sun.position.set(1, 2, 3);
+scene.add(sun);
+
+function frame(object) {
+  const sphere = new THREE.Box3().setFromObject(object).getBoundingSphere(new THREE.Sphere());
+  camera.position.copy(sphere.center).add(new THREE.Vector3(0.6, 0.35, 1).normalize().multiplyScalar(sphere.radius * 2.6));
+  camera.near = sphere.radius / 100;
+  camera.far = sphere.radius * 100;
+  camera.lookAt(sphere.center);
+  camera.updateProjectionMatrix();
+  return sphere;
+}
+
+// Draw and return what three.js drew.
+function draw() {
+  renderer.render(scene, camera);
+  const gl = renderer.getContext();
+  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+  const px = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  let s = 0, s2 = 0;
+  for (let i = 0; i < px.length; i += 4) {
+    const l = 0.299 * px[i] + 0.587 * px[i + 1] + 0.114 * px[i + 2];
+    s += l;
+    s2 += l * l;
+  }
+  const n = px.length / 4;
+  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2 };
+}
+
+function indexHash(g) {
+  // FNV-1a 32 over the drawn indices as little-endian u32 (view.rs index_hash)
+  const idx = g.index.array, n = g.drawRange.count === Infinity ? idx.length : g.drawRange.count;
+  let h = 0x811c9dc5;
+  for (let i = 0; i < n; i++) {
+    let v = idx[i];
+    for (let b = 0; b < 4; b++) {
+      h ^= v & 0xff;
+      h = Math.imul(h, 0x01000193) >>> 0;
+      v >>>= 8;
+    }
+  }
+  return h >>> 0;
+}
+
+function clear() {
+  for (const o of [...scene.children]) if (!o.isLight) scene.remove(o);
+}
+
+const t0 = () => performance.now();
+
+// Progressive: level events with drawn triangles, hash, pixels; timings.
+window.runProgressive = async (url, { stopAt = 0, keep = false } = {}) => {
+  clear();
+  const start = t0();
+  const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
+  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: stopAt });
+  scene.add(p.gltf.scene);
+  frame(p.gltf.scene);
+  const events = [];
+  const record = (e) => {
+    const d = draw();
+    events.push({ level: e.level, records: e.records, triangles: e.triangles, drawn: d.triangles, variance: d.variance,
+      hash: indexHash(p.geometry), t: t0() - start });
+  };
+  record({ level: p.levels.length - 1, records: 0, triangles: p.nt });
+  p.addEventListener('level', (e) => { if (e.records > 0) record(e); });
+  await p.refine(stopAt);
+  if (keep) window.progressive = p;
+  return { events, coarseTriangles: p.coarseTriangles, quantized: p.quantized };
+};
+
+// Plain GLTFLoader (+ MeshoptDecoder): time until the full mesh is drawn.
+window.runPlain = async (url) => {
+  clear();
+  const start = t0();
+  const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
+  const gltf = await loader.loadAsync(url);
+  scene.add(gltf.scene);
+  frame(gltf.scene);
+  const d = draw();
+  return { drawn: d.triangles, variance: d.variance, t: t0() - start };
+};
+
+// The same file without the progressive plugin, through three-gltf-extensions'
+// MSFT_lod plugin with the coverageDistance hook: the LOD's levels and, for
+// each level switch, the camera distance and the level shown just nearer /
+// just farther.
+window.runMsftLod = async (url) => {
+  clear();
+  // the bounding radius of the finest level, for the hook
+  const probe = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).loadAsync(url);
+  const radius = new THREE.Box3().setFromObject(probe.scene).getBoundingSphere(new THREE.Sphere()).radius;
+  const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
+  let coverages = null;
+  loader.register((parser) => new GLTFLodExtension(parser, {
+    calculateDistance: (level, lowest, cov) => { coverages = cov; return coverageDistance({ camera, radius })(level, lowest, cov); },
+  }));
+  const gltf = await loader.loadAsync(url);
+  scene.add(gltf.scene);
+  let lod = null;
+  gltf.scene.traverse((o) => { if (o.isLOD) lod = o; });
+  if (!lod) return { error: 'no THREE.LOD in the scene' };
+  frame(gltf.scene);
+  const levels = [];
+  for (let i = 0; i < lod.levels.length; i++) {
+    lod.levels.forEach((l, j) => { l.object.visible = j === i; });
+    let tris = 0;
+    lod.levels[i].object.traverse((o) => { if (o.isMesh) tris += o.geometry.index ? o.geometry.index.count / 3 : 0; });
+    levels.push({ distance: lod.levels[i].distance, triangles: tris });
+  }
+  const center = lod.getWorldPosition(new THREE.Vector3());
+  const dir = new THREE.Vector3(0, 0, 1);
+  const shownAt = (d) => {
+    camera.position.copy(center).addScaledVector(dir, d);
+    camera.lookAt(center);
+    camera.updateMatrixWorld();
+    lod.update(camera);
+    return lod.getCurrentLevel();
+  };
+  const switches = [];
+  for (let i = 1; i < lod.levels.length; i++) {
+    const d = distanceForCoverage(camera, radius, coverages[i - 1]);
+    switches.push({ level: i, coverage: coverages[i - 1], distance: d, radius, nearer: shownAt(d * 0.98), farther: shownAt(d * 1.02) });
+  }
+  frame(gltf.scene);
+  lod.update(camera);
+  const d = draw();
+  return { levels, switches, coverages, drawn: d.triangles, variance: d.variance };
+};
+
+window.pageReady = true;

@@ -1,0 +1,123 @@
+//! `cargo xtask stream-bench [--quick] [--runs N]`: time to first pixel and
+//! to full detail of a progressive file against the plain compressed full
+//! mesh, over a throttled local line (10 Mbit/s, 50 ms latency, set in the
+//! server), in headless Chromium with three.js (`tests/js/stream-bench.mjs`).
+//!
+//! Per mesh (the bunny and the 1.1M-triangle subdivided bunny; `--quick`:
+//! the bunny only) it writes, with the release `lodgen`:
+//! * plain: `lodgen X --levels 100% --quantize --compress meshopt`, loaded by
+//!   GLTFLoader + MeshoptDecoder until drawn;
+//! * progressive: `lodgen X --levels 100%,50%,10%,2% --progressive
+//!   --quantize --compress meshopt`, loaded by lodgen's three.js loader (the
+//!   coarsest level drawn = first pixel; the finest applied and drawn = full
+//!   detail),
+//!
+//! and prints the table the README's Streaming section quotes, with the
+//! stream's bytes against the plain file's.
+
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+use std::process::Command;
+
+fn lodgen(exe: &Path, input: &Path, output: &Path, args: &[&str]) -> Result<()> {
+    let status = Command::new(exe)
+        .arg(input)
+        .arg("-o")
+        .arg(output)
+        .args(args)
+        .arg("--quiet")
+        .status()
+        .with_context(|| format!("running {}", exe.display()))?;
+    anyhow::ensure!(status.success(), "lodgen {} failed", input.display());
+    Ok(())
+}
+
+/// Bytes of the `LODGEN_progressive` stream in a written file.
+fn stream_bytes(path: &Path) -> Result<usize> {
+    let (_, stream) = lodgen::progressive::read_file(path)?.context("no LODGEN_progressive")?;
+    Ok(stream.len())
+}
+
+pub fn run(args: &[String]) -> Result<()> {
+    let mut quick = false;
+    let mut runs = 3;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--quick" => quick = true,
+            "--runs" => runs = it.next().context("--runs needs a number")?.parse()?,
+            other => bail!("stream-bench: unknown argument {other:?}"),
+        }
+    }
+    let root = crate::workspace_root();
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let status = Command::new(cargo)
+        .args(["build", "--release", "--quiet", "-p", "lodgen"])
+        .current_dir(&root)
+        .status()?;
+    anyhow::ensure!(status.success(), "building lodgen failed");
+    let exe = root.join("target/release/lodgen");
+    let js = root.join("tests/js");
+    anyhow::ensure!(
+        js.join("node_modules/three").is_dir(),
+        "tests/js/node_modules is missing: cd tests/js && npm ci"
+    );
+    let dir = root.join("target/stream-bench");
+    std::fs::create_dir_all(&dir)?;
+    let meshes: &[&str] = if quick {
+        &["bunny"]
+    } else {
+        &["bunny", "bunny-1m"]
+    };
+    let mut rows = Vec::new();
+    for id in meshes {
+        let input = crate::e2e::mesh_file(id)?;
+        let plain = dir.join(format!("{id}-plain.glb"));
+        let prog = dir.join(format!("{id}-progressive.glb"));
+        let q = ["--quantize", "--compress", "meshopt"];
+        lodgen(
+            &exe,
+            &input,
+            &plain,
+            &[&["--levels", "100%"][..], &q].concat(),
+        )?;
+        let levels = ["--levels", "100%,50%,10%,2%", "--progressive"];
+        lodgen(&exe, &input, &prog, &[&levels[..], &q].concat())?;
+        let json = dir.join(format!("{id}.json"));
+        let status = Command::new("node")
+            .arg(js.join("stream-bench.mjs"))
+            .arg("--progressive")
+            .arg(&prog)
+            .arg("--plain")
+            .arg(&plain)
+            .args(["--name", id, "--runs", &runs.to_string(), "--json"])
+            .arg(&json)
+            .current_dir(&root)
+            .status()?;
+        anyhow::ensure!(status.success(), "stream-bench.mjs failed on {id}");
+        let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json)?)?;
+        let plain_bytes = std::fs::metadata(&plain)?.len() as f64;
+        rows.push((id.to_string(), r, stream_bytes(&prog)? as f64 / plain_bytes));
+    }
+    println!(
+        "\nthrottled line: 10 Mbit/s, 50 ms latency per response; three.js in headless Chromium; median of {runs}"
+    );
+    println!(
+        "{:<9} {:>11} {:>12} {:>14} {:>14} {:>10} {:>9}",
+        "mesh", "plain ms", "stream/plain", "first px ms", "full ms", "first/pl", "full/pl"
+    );
+    for (id, r, ratio) in &rows {
+        let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "{:<9} {:>11.0} {:>11.2}× {:>14.0} {:>14.0} {:>9.2}× {:>8.2}×",
+            id,
+            f("plainMs"),
+            ratio,
+            f("firstPixelMs"),
+            f("fullDetailMs"),
+            f("firstRatio"),
+            f("fullRatio"),
+        );
+    }
+    Ok(())
+}
