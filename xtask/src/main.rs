@@ -10,6 +10,7 @@ mod e2e;
 mod fuzz;
 mod golden;
 mod layout;
+mod quality;
 mod render;
 mod stream_bench;
 mod test;
@@ -30,6 +31,9 @@ tasks:
                           headless Chromium over a throttled 10 Mbit/s, 50 ms line (bunny, 1.1M bunny)
   compare [--meshes bunny,cow,fandisk] [--no-render]
                           every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
+  quality [--quick] [--meshes a,b] [--no-peers] [--greedy]
+                          lodgen vs meshopt, MeshLab, Open3D, pyfqmr, fast-simplification (Python
+                          peers in target/quality-venv) at 50/10/2%: docs/quality.md, docs/quality.png
 
   layout                  files ≤ 800 lines, functions ≤ 120 lines outside tests, no module cycles
                           (crates/*/src, xtask/src)
@@ -53,6 +57,7 @@ fn main() -> anyhow::Result<()> {
         "compare" => compare::run(rest),
         "stream-bench" => stream_bench::run(rest),
         "layout" => layout::run(rest),
+        "quality" => quality::run(rest),
         "help" | "-h" | "--help" => {
             println!("{USAGE}");
             Ok(())

@@ -52,6 +52,7 @@ impl Simplifier {
             *v = v.wrapping_add(1);
         }
         self.boundary[i1] |= self.boundary[i0];
+        self.corner[i1] |= self.corner[i0];
         if let Some(f) = &mut self.features {
             f.contract(v0, v1);
         }

@@ -22,14 +22,15 @@ impl Simplifier {
         match (self.locked[a as usize], self.locked[b as usize]) {
             (true, _) => (pa, q.eval(pa)),
             (false, true) => (pb, q.eval(pb)),
-            // Border vertices never move to a new position: an interior
-            // vertex is pulled onto a border one, and two border vertices
-            // merge into the cheaper of the two (half-edge). With optimal
+            // Border corners never move to a new position: an interior or
+            // border vertex is pulled onto a corner, and two corners merge
+            // into the cheaper of the two (half-edge). With optimal
             // placement a corner slides a little along one border line, and
             // the next collapse along the other line cuts it off: borders
-            // creep. The constraint planes still price which one goes.
-            // Feature vertices follow the same rule (`pinned`), and a seam
-            // corner is never the one removed (`fixed`).
+            // creep. Other border vertices take optimal placement, held to
+            // the border by its constraint planes. Feature vertices follow
+            // the corners' rule (`pinned`), and a seam corner is never the
+            // one removed (`fixed`).
             (false, false) if self.pinned(a) && !self.pinned(b) || self.fixed(a) => {
                 (pa, q.eval(pa))
             }
@@ -56,10 +57,10 @@ impl Simplifier {
         self.partners.get(v as usize).map_or(&[], |p| p)
     }
 
-    /// On a border or a feature line: never moves to a new position.
+    /// A border corner or on a feature line: never moves to a new position.
     #[inline]
     pub(super) fn pinned(&self, v: u32) -> bool {
-        self.boundary[v as usize] || self.features.as_ref().is_some_and(|f| f.pinned(v))
+        self.corner[v as usize] || self.features.as_ref().is_some_and(|f| f.pinned(v))
     }
 
     /// A seam corner or end: never removed.

@@ -120,6 +120,9 @@ pub struct Simplifier {
     alive: Vec<bool>,
     locked: Vec<bool>,
     boundary: Vec<bool>,
+    /// Border corners (`setup::BORDER_CORNER_COS`): pinned like feature
+    /// vertices.
+    corner: Vec<bool>,
     /// [`Schedule::Greedy`]: every pair, lazily invalidated.
     heap: QuadHeap<Entry>,
     /// [`Schedule::Passes`]: the pass in progress.
@@ -187,6 +190,12 @@ struct Pass {
     /// a sixth of its goal, as meshoptimizer does, so that a pass whose
     /// cheap pairs were all blocked still makes progress).
     cost_limit: f32,
+    /// The pass skips candidates whose cost per unit of quadric weight (a
+    /// mean squared distance) exceeds this (`Simplifier::deferred`);
+    /// infinite for a pass without the bound.
+    spread_limit: f64,
+    /// Candidates skipped by `spread_limit` in this pass.
+    deferred: usize,
 }
 
 #[inline]

@@ -65,10 +65,16 @@ impl Simplifier {
         // only in order, in the rare case it is still wanted then.
         let claim = self.next_generation();
         let (pass, mark) = (&self.pass, &mut self.mark);
+        let mut deferred = 0;
         while scan < end && batch.len() < want {
             let e = pass.queue[scan];
             let (a, b) = (e.a as usize, e.b as usize);
             if pass.touched[a] != n && pass.touched[b] != n {
+                if pass.defers(&self.quadric, e) {
+                    deferred += 1;
+                    scan += 1;
+                    continue;
+                }
                 let later = mark[a] == claim || mark[b] == claim;
                 (mark[a], mark[b]) = (claim, claim);
                 debug_assert!(scan < LATER as usize);
@@ -76,6 +82,7 @@ impl Simplifier {
             }
             scan += 1;
         }
+        self.pass.deferred += deferred;
         scan
     }
 

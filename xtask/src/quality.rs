@@ -1,0 +1,680 @@
+//! `cargo xtask quality`: lodgen's geometric error against the other
+//! simplifiers, mesh by mesh and level by level (issue 19's table).
+//!
+//! Every tool gets the same positions-only input — the welded, cleaned mesh
+//! `lodgen_pm::prepare` makes of each OBJ in `$LODGEN_ASSETS` (plus the
+//! bunny subdivided twice by midpoints, 1.1 M triangles, as `cargo xtask
+//! bench` makes it) — and the same triangle count: lodgen runs once to the
+//! smallest level and cuts 50 %, 10 % and 2 % from its vertex-split log, as
+//! `lodgen` does; each peer is then asked for exactly the count lodgen's
+//! level has. Peers: meshoptimizer through the `meshopt` crate, in process;
+//! MeshLab (`pymeshlab`, `meshing_decimation_quadric_edge_collapse`),
+//! Open3D (`simplify_quadric_decimation`), pyfqmr and fast-simplification
+//! through their PyPI packages, all with their default settings, in a venv
+//! this task makes under `target/quality-venv` (a peer whose package does
+//! not install or import is skipped with a notice). Every output is
+//! measured by `lodgen_pm::metric` against the welded input: symmetric,
+//! `SAMPLES` area samples per direction plus every vertex, in percent of
+//! the bounding-box diagonal.
+//!
+//! Writes `docs/quality.md` (the table) and `docs/quality.png` (error
+//! against triangle count, one panel per mesh). `--quick`: lodgen and
+//! meshopt only, fewer samples, no big mesh, nothing written (the loop for
+//! trying a change of the simplifier). `--meshes a,b` runs a subset;
+//! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
+//! `Schedule::Greedy` instead of its default pass schedule.
+
+use anyhow::{bail, Context, Result};
+use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
+use lodgen_pm::shapes::subdivide;
+use lodgen_pm::{prepare, simplify, Mesh, SimplifyOptions};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const MESHES: [&str; 8] = [
+    "bunny",
+    "cow",
+    "fandisk",
+    "rocker-arm",
+    "teapot",
+    "spot",
+    "beetle",
+    "bunny-1m",
+];
+const RATIOS: [f64; 3] = [0.5, 0.1, 0.02];
+/// Area samples per direction (the issue's Metro-style setting).
+const SAMPLES: usize = 1_000_000;
+/// Area samples per direction with `--quick`.
+const QUICK_SAMPLES: usize = 200_000;
+/// meshopt's `target_error` is relative to the mesh extent: 1.0 never binds.
+const MESHOPT_NO_ERROR_BOUND: f32 = 1.0;
+/// The Python peers: (label, module to import, pip package).
+const PEERS: [(&str, &str, &str); 4] = [
+    ("MeshLab", "pymeshlab", "pymeshlab"),
+    ("Open3D", "open3d", "open3d"),
+    ("pyfqmr", "pyfqmr", "pyfqmr"),
+    ("fast-simpl.", "fast_simplification", "fast-simplification"),
+];
+const PLOT_PANEL: (u32, u32) = (420, 330);
+const DEFAULT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+/// Reads `IN.bin` (u32 vertex count, u32 triangle count, f32 xyz…, u32
+/// abc…) and, for each target count given, writes one simplified mesh per
+/// tool in the same format to `OUT-TOOL-COUNT.bin` (or nothing when the
+/// tool fails, with the error on stderr).
+const PEER_SCRIPT: &str = r#"
+import sys, struct, numpy as np
+src, out, tools = sys.argv[1], sys.argv[2], sys.argv[3].split(',')
+counts = [int(c) for c in sys.argv[4:]]
+b = open(src, 'rb').read()
+nv, nt = struct.unpack('<II', b[:8])
+v = np.frombuffer(b, '<f4', 3 * nv, 8).reshape(nv, 3).astype(np.float64)
+f = np.frombuffer(b, '<u4', 3 * nt, 8 + 12 * nv).reshape(nt, 3).astype(np.int64)
+def save(tool, n, pv, pf):
+    pv = np.ascontiguousarray(pv, '<f4'); pf = np.ascontiguousarray(pf, '<u4')
+    with open('%s-%s-%d.bin' % (out, tool, n), 'wb') as o:
+        o.write(struct.pack('<II', len(pv), len(pf))); o.write(pv.tobytes()); o.write(pf.tobytes())
+def meshlab(n):
+    import pymeshlab
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=v, face_matrix=f.astype(np.int32)))
+    ms.meshing_decimation_quadric_edge_collapse(targetfacenum=n)
+    m = ms.current_mesh()
+    return m.vertex_matrix(), m.face_matrix()
+def open3d(n):
+    import open3d as o3d
+    m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(v), o3d.utility.Vector3iVector(f.astype(np.int32)))
+    r = m.simplify_quadric_decimation(target_number_of_triangles=n)
+    return np.asarray(r.vertices), np.asarray(r.triangles)
+def pyfqmr(n):
+    import pyfqmr
+    s = pyfqmr.Simplify()
+    s.setMesh(v, f.astype(np.int32))
+    s.simplify_mesh(target_count=n, verbose=False)
+    pv, pf, _ = s.getMesh()
+    return pv, pf
+def fast(n):
+    import fast_simplification
+    pv, pf = fast_simplification.simplify(v.astype(np.float32), f.astype(np.int32), target_reduction=1.0 - n / nt)
+    return pv, pf
+run = {'pymeshlab': meshlab, 'open3d': open3d, 'pyfqmr': pyfqmr, 'fast_simplification': fast}
+for tool in tools:
+    for n in counts:
+        try:
+            pv, pf = run[tool](n)
+            save(tool, n, pv, pf)
+        except Exception as e:
+            print('%s at %d: %s' % (tool, n, e), file=sys.stderr)
+"#;
+
+/// One measured output.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    triangles: usize,
+    hausdorff: f64,
+    rms: f64,
+}
+
+/// One mesh at one level: lodgen, then every peer (None: skipped / failed).
+struct Row {
+    mesh: &'static str,
+    ratio: f64,
+    lodgen: Cell,
+    peers: Vec<Option<Cell>>,
+}
+
+struct Args {
+    meshes: Vec<&'static str>,
+    quick: bool,
+    python: bool,
+    greedy: bool,
+}
+
+fn parse(args: &[String]) -> Result<Args> {
+    let mut out = Args {
+        meshes: MESHES.to_vec(),
+        quick: false,
+        python: true,
+        greedy: false,
+    };
+    let mut it = args.iter();
+    let mut chosen = false;
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--meshes" => {
+                let list = it.next().context("--meshes needs a list, e.g. cow,spot")?;
+                out.meshes = MESHES
+                    .into_iter()
+                    .filter(|m| list.split(',').any(|x| x == *m))
+                    .collect();
+                chosen = true;
+            }
+            "--quick" => out.quick = true,
+            "--no-peers" => out.python = false,
+            "--greedy" => out.greedy = true,
+            other => bail!(
+                "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy)"
+            ),
+        }
+    }
+    if out.quick {
+        out.python = false;
+        if !chosen {
+            out.meshes.retain(|m| *m != "bunny-1m");
+        }
+    }
+    Ok(out)
+}
+
+/// The welded, cleaned input mesh `name`.
+fn input(assets: &Path, name: &str) -> Result<Mesh> {
+    let file = if name == "bunny-1m" { "bunny" } else { name };
+    let path = assets.join(format!("{file}.obj"));
+    let scene =
+        lodgen::io::read_scene(&path).with_context(|| format!("reading {}", path.display()))?;
+    let mut m = lodgen::cli::merged_mesh(&scene);
+    if name == "bunny-1m" {
+        m = subdivide(&subdivide(&m));
+    }
+    let p = prepare(&m.positions, &m.indices())
+        .with_context(|| format!("preparing {}", path.display()))?;
+    Ok(p.mesh)
+}
+
+/// lodgen's levels: one run to the smallest ratio, levels cut from the log.
+fn lodgen_levels(m: &Mesh, greedy: bool) -> Result<Vec<Mesh>> {
+    let n = m.triangles.len();
+    let mut opts = SimplifyOptions::DEFAULT.with_target_ratio(RATIOS[RATIOS.len() - 1]);
+    if greedy {
+        opts = opts.with_schedule(lodgen_pm::Schedule::Greedy);
+    }
+    let out = simplify(&m.positions, &m.indices(), &opts)?;
+    let mut c = out.pm.cursor();
+    Ok(RATIOS
+        .iter()
+        .map(|r| {
+            c.seek(out.pm.splits_for_triangles((r * n as f64).floor() as usize));
+            c.mesh().clone()
+        })
+        .collect())
+}
+
+fn meshopt_level(m: &Mesh, target: usize) -> Result<Mesh> {
+    let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&m.positions), 12, 0)?;
+    let idx = meshopt::simplify(
+        &m.indices(),
+        &adapter,
+        target * 3,
+        MESHOPT_NO_ERROR_BOUND,
+        meshopt::SimplifyOptions::None,
+        None,
+    );
+    Ok(Mesh {
+        positions: m.positions.clone(),
+        triangles: idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    })
+}
+
+fn measure_cell(reference: &Reference, m: &Mesh, opts: &MeasureOptions) -> Result<Cell> {
+    let e = reference.measure(MeshRef::new(&m.positions, &m.triangles), opts)?;
+    Ok(Cell {
+        triangles: m.triangles.len(),
+        hausdorff: e.hausdorff_percent(),
+        rms: e.rms_percent(),
+    })
+}
+
+fn write_bin(path: &Path, m: &Mesh) -> Result<()> {
+    let mut b = Vec::with_capacity(8 + 12 * (m.positions.len() + m.triangles.len()));
+    b.extend_from_slice(&(m.positions.len() as u32).to_le_bytes());
+    b.extend_from_slice(&(m.triangles.len() as u32).to_le_bytes());
+    for p in &m.positions {
+        p.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+    }
+    for t in &m.triangles {
+        t.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+    }
+    std::fs::write(path, b).with_context(|| format!("writing {}", path.display()))
+}
+
+fn read_bin(path: &Path) -> Result<Mesh> {
+    let b = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let word = |i: usize| -> Result<[u8; 4]> {
+        b.get(4 * i..4 * i + 4)
+            .and_then(|s| s.try_into().ok())
+            .with_context(|| format!("{} is truncated", path.display()))
+    };
+    let nv = u32::from_le_bytes(word(0)?) as usize;
+    let nt = u32::from_le_bytes(word(1)?) as usize;
+    let positions = (0..nv)
+        .map(|i| {
+            let f = |k| word(2 + 3 * i + k).map(f32::from_le_bytes);
+            Ok([f(0)?, f(1)?, f(2)?])
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let base = 2 + 3 * nv;
+    let triangles = (0..nt)
+        .map(|i| {
+            let u = |k| word(base + 3 * i + k).map(u32::from_le_bytes);
+            Ok([u(0)?, u(1)?, u(2)?])
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Mesh {
+        positions,
+        triangles,
+    })
+}
+
+/// The venv's python with every peer package that imports (installing
+/// what is missing), or `None` with a notice.
+fn peer_python() -> Result<Option<(PathBuf, Vec<usize>)>> {
+    let venv = crate::workspace_root().join("target/quality-venv");
+    let py = venv.join("bin/python");
+    if !py.exists() {
+        eprintln!("quality: creating {}", venv.display());
+        let ok = Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&venv)
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            eprintln!("quality: notice: python3 -m venv failed: the Python peers are skipped");
+            return Ok(None);
+        }
+    }
+    // `None` when `module` imports, else the last line of its error
+    let import_error = |module: &str| -> Option<String> {
+        match Command::new(&py)
+            .args(["-c", &format!("import numpy, {module}")])
+            .output()
+        {
+            Ok(o) if o.status.success() => None,
+            Ok(o) => Some(
+                String::from_utf8_lossy(&o.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+                    .to_string(),
+            ),
+            Err(e) => Some(e.to_string()),
+        }
+    };
+    let mut usable = Vec::new();
+    for (i, (label, module, package)) in PEERS.iter().enumerate() {
+        if import_error(module).is_some() {
+            eprintln!("quality: installing {package} (and numpy) into the venv");
+            let _ = Command::new(&py)
+                .args(["-m", "pip", "install", "-q", "numpy", package])
+                .status();
+        }
+        match import_error(module) {
+            None => usable.push(i),
+            Some(e) => eprintln!(
+                "quality: notice: {package} does not install or import here ({e}): {label} is \
+                 skipped (Open3D needs the system library libusb-1.0: apt-get install \
+                 libusb-1.0-0)"
+            ),
+        }
+    }
+    Ok(Some((py, usable)))
+}
+
+/// Runs the usable Python peers on `m` at each count; `None` where one
+/// failed or was skipped. Indexed `[peer][count]`.
+fn python_peers(
+    py: &Path,
+    usable: &[usize],
+    m: &Mesh,
+    counts: &[usize],
+) -> Result<Vec<Vec<Option<Mesh>>>> {
+    let dir = tempfile::tempdir()?;
+    let src = dir.path().join("in.bin");
+    write_bin(&src, m)?;
+    let script = dir.path().join("peers.py");
+    std::fs::write(&script, PEER_SCRIPT)?;
+    let modules: Vec<&str> = usable.iter().map(|&i| PEERS[i].1).collect();
+    let out = dir.path().join("out");
+    let status = Command::new(py)
+        .arg(&script)
+        .arg(&src)
+        .arg(&out)
+        .arg(modules.join(","))
+        .args(counts.iter().map(|c| c.to_string()))
+        .status()
+        .context("running the Python peers")?;
+    if !status.success() {
+        eprintln!("quality: notice: the peer script failed ({status})");
+    }
+    let mut res = vec![vec![None; counts.len()]; PEERS.len()];
+    for &i in usable {
+        for (k, &n) in counts.iter().enumerate() {
+            let f = PathBuf::from(format!("{}-{}-{n}.bin", out.display(), PEERS[i].1));
+            if f.exists() {
+                res[i][k] = Some(read_bin(&f)?);
+            }
+        }
+    }
+    Ok(res)
+}
+
+pub fn run(args: &[String]) -> Result<()> {
+    if crate::rerun_in_release("quality", args)? {
+        return Ok(());
+    }
+    let args = parse(args)?;
+    let assets = crate::shared_assets()?;
+    let samples = if args.quick { QUICK_SAMPLES } else { SAMPLES };
+    let mopts = MeasureOptions::DEFAULT
+        .with_samples_per_triangle(0.0)
+        .with_min_samples(samples);
+    let python = if args.python { peer_python()? } else { None };
+    let mut rows = Vec::new();
+    for &name in &args.meshes {
+        let m = input(&assets, name)?;
+        let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
+        let levels = lodgen_levels(&m, args.greedy)?;
+        let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
+        let mut peers: Vec<Vec<Option<Mesh>>> = vec![vec![None; counts.len()]; PEERS.len()];
+        if let Some((py, usable)) = &python {
+            peers = python_peers(py, usable, &m, &counts)?;
+        }
+        for (k, level) in levels.iter().enumerate() {
+            let lodgen = measure_cell(&reference, level, &mopts)?;
+            let mut cells = vec![Some(measure_cell(
+                &reference,
+                &meshopt_level(&m, counts[k])?,
+                &mopts,
+            )?)];
+            for p in &peers {
+                cells.push(match &p[k] {
+                    Some(mesh) => Some(measure_cell(&reference, mesh, &mopts)?),
+                    None => None,
+                });
+            }
+            let row = Row {
+                mesh: name,
+                ratio: RATIOS[k],
+                lodgen,
+                peers: cells,
+            };
+            println!("{}", line(&row));
+            rows.push(row);
+        }
+    }
+    let (gh, gr) = geo_means(&rows);
+    println!("lodgen / best peer, geometric mean: Hausdorff {gh:.3}, RMS {gr:.3}");
+    if !args.quick {
+        let docs = crate::workspace_root().join("docs");
+        plot(&docs.join("quality.png"), &args.meshes, &rows)?;
+        std::fs::write(docs.join("quality.md"), report(&rows, samples))
+            .context("writing docs/quality.md")?;
+        eprintln!("wrote docs/quality.md, docs/quality.png");
+    }
+    Ok(())
+}
+
+/// Peer labels, in `Row::peers` order.
+fn peer_labels() -> Vec<&'static str> {
+    std::iter::once("meshopt")
+        .chain(PEERS.iter().map(|p| p.0))
+        .collect()
+}
+
+/// The best peer's Hausdorff and RMS (each over the peers that ran), with
+/// the tools' labels.
+/// An error value and the tool that reached it.
+type Best = (f64, &'static str);
+
+fn best(row: &Row) -> Option<(Best, Best)> {
+    let labels = peer_labels();
+    let mut h: Option<(f64, &str)> = None;
+    let mut r: Option<(f64, &str)> = None;
+    for (c, l) in row.peers.iter().zip(labels) {
+        if let Some(c) = c {
+            if h.is_none_or(|b| c.hausdorff < b.0) {
+                h = Some((c.hausdorff, l));
+            }
+            if r.is_none_or(|b| c.rms < b.0) {
+                r = Some((c.rms, l));
+            }
+        }
+    }
+    Some((h?, r?))
+}
+
+fn line(row: &Row) -> String {
+    let mut s = format!(
+        "{:<10} {:>3}% {:>7} tris  lodgen H {:.4} R {:.5}",
+        row.mesh,
+        row.ratio * 100.0,
+        row.lodgen.triangles,
+        row.lodgen.hausdorff,
+        row.lodgen.rms
+    );
+    for (c, l) in row.peers.iter().zip(peer_labels()) {
+        if let Some(c) = c {
+            let _ = write!(s, " | {l} H {:.4} R {:.5}", c.hausdorff, c.rms);
+        }
+    }
+    if let Some(((h, _), (r, _))) = best(row) {
+        let _ = write!(
+            s,
+            " | ratio H {:.2} R {:.2}",
+            row.lodgen.hausdorff / h,
+            row.lodgen.rms / r
+        );
+    }
+    s
+}
+
+/// Geometric means of lodgen / best peer over the rows (Hausdorff, RMS).
+fn geo_means(rows: &[Row]) -> (f64, f64) {
+    let (mut lh, mut lr, mut n) = (0.0, 0.0, 0usize);
+    for row in rows {
+        if let Some(((h, _), (r, _))) = best(row) {
+            if h > 0.0 && r > 0.0 && row.lodgen.hausdorff > 0.0 && row.lodgen.rms > 0.0 {
+                lh += (row.lodgen.hausdorff / h).ln();
+                lr += (row.lodgen.rms / r).ln();
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    ((lh / n as f64).exp(), (lr / n as f64).exp())
+}
+
+fn report(rows: &[Row], samples: usize) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Quality against other simplifiers\n\n\
+         Generated by `cargo xtask quality` (xtask/src/quality.rs). Positions-only input: the \
+         welded, cleaned mesh of each OBJ in the shared assets, and `bunny-1m` (the bunny \
+         subdivided twice by midpoints, as `cargo xtask bench` makes it). lodgen runs once to \
+         2 % with its defaults and its levels are cut from the vertex-split log; every peer is \
+         asked for exactly the triangle count of lodgen's level, with its default settings: \
+         meshoptimizer (`meshopt` crate, `simplify`, no error bound), MeshLab \
+         (`pymeshlab`, `meshing_decimation_quadric_edge_collapse`), Open3D \
+         (`simplify_quadric_decimation`), pyfqmr, fast-simplification. Errors: \
+         `lodgen_pm::metric`, symmetric, {samples} area samples per direction plus every \
+         vertex, in % of the bounding-box diagonal. H = Hausdorff, R = RMS; **bold**: lodgen \
+         worse than the best peer; ratio = lodgen / best peer.\n"
+    );
+    let labels = peer_labels();
+    let _ = write!(s, "| mesh | level | tris | lodgen H / R |");
+    for l in &labels {
+        let _ = write!(s, " {l} H / R |");
+    }
+    let _ = writeln!(s, " best H | best R | ratio H / R |");
+    let _ = write!(s, "|---|---|---|---|");
+    for _ in &labels {
+        let _ = write!(s, "---|");
+    }
+    let _ = writeln!(s, "---|---|---|");
+    for row in rows {
+        let b = best(row);
+        let (bh, br) = b.map_or((f64::INFINITY, f64::INFINITY), |x| (x.0 .0, x.1 .0));
+        let bold = |v: f64, lim: f64, t: String| if v > lim { format!("**{t}**") } else { t };
+        let _ = write!(
+            s,
+            "| {} | {} % | {} | {} / {} |",
+            row.mesh,
+            row.ratio * 100.0,
+            row.lodgen.triangles,
+            bold(
+                row.lodgen.hausdorff,
+                bh,
+                format!("{:.4}", row.lodgen.hausdorff)
+            ),
+            bold(row.lodgen.rms, br, format!("{:.5}", row.lodgen.rms)),
+        );
+        for c in &row.peers {
+            match c {
+                Some(c) => {
+                    let _ = write!(s, " {:.4} / {:.5} |", c.hausdorff, c.rms);
+                }
+                None => {
+                    let _ = write!(s, " – |");
+                }
+            }
+        }
+        match b {
+            Some(((h, hl), (r, rl))) => {
+                let _ = writeln!(
+                    s,
+                    " {h:.4} ({hl}) | {r:.5} ({rl}) | {:.2} / {:.2} |",
+                    row.lodgen.hausdorff / h,
+                    row.lodgen.rms / r
+                );
+            }
+            None => {
+                let _ = writeln!(s, " – | – | – |");
+            }
+        }
+    }
+    let (gh, gr) = geo_means(rows);
+    let _ = writeln!(
+        s,
+        "\nGeometric mean of lodgen / best peer over the cells: Hausdorff {gh:.3}, RMS {gr:.3}.\n\n\
+         ![error against triangle count](quality.png)"
+    );
+    s
+}
+
+fn plot(path: &Path, meshes: &[&str], rows: &[Row]) -> Result<()> {
+    use plotters::prelude::*;
+    let font_path = std::env::var_os("LODGEN_FONT")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_FONT));
+    let font = std::fs::read(&font_path)
+        .with_context(|| format!("reading the plot font {}", font_path.display()))?;
+    let font: &'static [u8] = Box::leak(font.into_boxed_slice());
+    plotters::style::register_font("sans-serif", FontStyle::Normal, font)
+        .map_err(|_| anyhow::anyhow!("{} is not a usable font", font_path.display()))?;
+    let cols = meshes.len().max(1) as u32;
+    let (w, h) = (PLOT_PANEL.0 * cols, PLOT_PANEL.1 * 2);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    let mut labels = vec!["lodgen"];
+    labels.extend(peer_labels());
+    let colours = [
+        RGBColor(214, 39, 40),
+        RGBColor(60, 60, 60),
+        RGBColor(31, 119, 180),
+        RGBColor(44, 160, 44),
+        RGBColor(255, 127, 14),
+        RGBColor(148, 103, 189),
+    ];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let panels = root.split_evenly((2, cols as usize));
+        for (r, metric) in ["Hausdorff", "RMS"].iter().enumerate() {
+            for (col, m) in meshes.iter().enumerate() {
+                let of = |c: &Cell| {
+                    let e = if r == 0 { c.hausdorff } else { c.rms };
+                    e.max(1e-5)
+                };
+                // (tool, triangles, error)
+                let mut pts: Vec<(usize, f64, f64)> = Vec::new();
+                for row in rows.iter().filter(|x| x.mesh == *m) {
+                    pts.push((0, row.lodgen.triangles as f64, of(&row.lodgen)));
+                    for (i, c) in row.peers.iter().enumerate() {
+                        if let Some(c) = c {
+                            pts.push((i + 1, c.triangles.max(1) as f64, of(c)));
+                        }
+                    }
+                }
+                if pts.is_empty() {
+                    continue;
+                }
+                let xs = pts.iter().map(|p| p.1);
+                let (x0, x1) = (
+                    xs.clone().fold(f64::INFINITY, f64::min),
+                    xs.fold(1.0, f64::max),
+                );
+                let ys = pts.iter().map(|p| p.2);
+                let (y0, y1) = (
+                    ys.clone().fold(f64::INFINITY, f64::min),
+                    ys.fold(0.0, f64::max),
+                );
+                let mut chart = ChartBuilder::on(&panels[r * cols as usize + col])
+                    .caption(format!("{m}: {metric} %"), ("sans-serif", 16))
+                    .margin(8)
+                    .x_label_area_size(30)
+                    .y_label_area_size(50)
+                    .build_cartesian_2d(
+                        (x0 * 0.8..x1 * 1.25).log_scale(),
+                        (y0 * 0.7..y1 * 1.4).log_scale(),
+                    )
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                chart
+                    .configure_mesh()
+                    .x_desc("triangles")
+                    .x_labels(4)
+                    .y_labels(5)
+                    .label_style(("sans-serif", 11))
+                    .draw()
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                for (t, label) in labels.iter().enumerate() {
+                    let mut series: Vec<(f64, f64)> = pts
+                        .iter()
+                        .filter(|p| p.0 == t)
+                        .map(|p| (p.1, p.2))
+                        .collect();
+                    if series.is_empty() {
+                        continue;
+                    }
+                    series.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    let c = colours[t % colours.len()];
+                    let width = if t == 0 { 3 } else { 1 };
+                    let drawn = chart
+                        .draw_series(LineSeries::new(series.clone(), c.stroke_width(width)))
+                        .map_err(|e| anyhow::anyhow!("{e}"))?;
+                    if r == 0 && col == 0 {
+                        drawn.label(*label).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(3))
+                        });
+                    }
+                    chart
+                        .draw_series(series.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                        .map_err(|e| anyhow::anyhow!("{e}"))?;
+                }
+                if r == 0 && col == 0 {
+                    chart
+                        .configure_series_labels()
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .label_font(("sans-serif", 11))
+                        .position(SeriesLabelPosition::LowerLeft)
+                        .draw()
+                        .map_err(|e| anyhow::anyhow!("{e}"))?;
+                }
+            }
+        }
+        root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
+    crate::render::write_png(path, w as usize, h as usize, &buf)
+}
