@@ -229,6 +229,7 @@ impl Simplifier {
                 .map(|(g, &h)| self.locked[get(g)] || h)
                 .collect(),
             boundary: verts.iter().map(|g| self.boundary[get(g)]).collect(),
+            corner: verts.iter().map(|g| self.corner[get(g)]).collect(),
             heap: QuadHeap::from_vec(Vec::new()),
             pass: Pass {
                 touched: vec![0; nv],
@@ -341,7 +342,8 @@ fn round(locals: &mut [Local], live: usize, goal: usize, most: usize, factor: f3
         // (u128: live × most may not fit a usize)
         let share = (l.s.live_tris as u128 * most as u128 / live.max(1) as u128) as usize;
         l.s.target = l.s.live_tris - share;
-        l.s.start_pass(factor);
+        // (no spread bound: the round's walk takes pairs by cost only)
+        l.s.start_pass(factor, false);
     });
     let limit = union_limit(locals, goal / 2, factor);
     locals
