@@ -4,7 +4,7 @@
 //! npm package reads), its index-sequence codec (`decodeIndexSequence`),
 //! or raw (the corner-edit bit masks). Also the varint and bit helpers.
 
-use super::{invalid, StreamError};
+use super::types::{invalid, StreamError};
 
 /// Meshoptimizer vertex codec version and level the encoder uses.
 const VERTEX_VERSION: i32 = 1;

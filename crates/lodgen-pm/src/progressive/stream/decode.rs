@@ -3,7 +3,7 @@
 use super::columns::{differences, BitReader, ColumnReader, Words};
 use super::header::{self, ReadError, Reader};
 use super::topo::{self, Topo, FACE_ESCAPE};
-use super::{invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS};
+use super::types::{invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS};
 use crate::mesh::Mesh;
 use crate::progressive::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 use smallvec::SmallVec;

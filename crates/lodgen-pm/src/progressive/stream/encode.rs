@@ -1,9 +1,10 @@
 //! The encoder: header, base chunk, one chunk per level step.
 
 use super::columns::{prefix_sums, BitWriter, ColumnWriter};
+use super::header;
 use super::topo::{self, Topo, FACE_ESCAPE};
-use super::{
-    chunk_ends, header, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamHeader, WedgeAttributes,
+use super::types::{
+    chunk_ends, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamHeader, WedgeAttributes,
     WedgeLayout, FLAG_ERRORS, FLAG_WEDGES,
 };
 use crate::progressive::{ProgressiveMesh, WedgeLog};

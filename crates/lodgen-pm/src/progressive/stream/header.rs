@@ -2,7 +2,7 @@
 //! still be incomplete.
 
 use super::columns::put_varint;
-use super::{
+use super::types::{
     invalid, Channel, ChunkInfo, Grid, StreamError, StreamHeader, WedgeLayout, FLAG_ERRORS,
     FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
 };
