@@ -299,13 +299,15 @@ fn partitioned(m: &Mesh, opts: &SimplifyOptions, size: usize) -> ProgressiveMesh
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(16))]
+    // (properties.proptest-regressions holds a case where contracting
+    // into held vertices made a double face across a cluster border)
+    #![proptest_config(ProptestConfig::with_cases(32))]
 
     /// Partitioned runs (clusters simplified in parallel, then the whole
     /// mesh) keep every invariant: clean levels, exact replay, the same
     /// log for any thread count.
     #[test]
-    fn partitioned_runs_keep_every_invariant(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.5, size in 10usize..60) {
+    fn partitioned_runs_keep_every_invariant(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.1, size in 6usize..28) {
         let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
         let pm = partitioned(&m, &opts, size);
@@ -315,19 +317,20 @@ proptest! {
 }
 
 #[test]
-fn partitioned_cow_replays_exactly_and_differs_from_the_whole_mesh_walk() {
+fn partitioned_cow_replays_exactly_and_differs_from_the_whole_mesh_walk_below_ten_percent() {
     let Some(text) = common::shared_asset_text("cow.obj") else {
         return;
     };
     let (p, idx) = common::read_obj(&text);
     let m = prepare(&p, &idx).unwrap().mesh;
-    for ratio in [0.5, 0.02] {
+    for ratio in [0.5, 0.1, 0.02] {
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
         let pm = partitioned(&m, &opts, 500);
         check_levels(&pm, true);
         assert_eq!(pm.full_in_input_order(), m);
-        // (the clusters really were simplified on their own)
+        // the clusters really were simplified on their own, but for a
+        // target above 10 % (no room left for the whole-mesh passes)
         let whole = simplify(&p, &idx, &opts.with_partition(None)).unwrap().pm;
-        assert_ne!(pm, whole, "ratio {ratio}");
+        assert_eq!(pm == whole, ratio > 0.1, "ratio {ratio}");
     }
 }

@@ -95,8 +95,8 @@ pub struct SimplifyOptions {
     /// into clusters of about this many consecutive triangles, simplify
     /// their interiors in parallel with the clusters' shared borders held,
     /// then continue on the whole mesh. Taken by position-only pass runs
-    /// (no τ pairs, feature edges, wedges or attributes) on meshes of at
-    /// least eight clusters; the result depends on this value, never on the
+    /// (no τ pairs, feature edges, wedges or attributes) to at most 10 %
+    /// of the input, on meshes of at least eight clusters; the result depends on this value, never on the
     /// thread count. `None`: the whole-mesh walk throughout. Default
     /// value: `Some(DEFAULT_CLUSTER_TRIANGLES)`.
     pub partition: Option<usize>,

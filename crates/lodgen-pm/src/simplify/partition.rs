@@ -19,8 +19,8 @@
 //! to remove), and each walks its own pairs cheapest first up to that
 //! limit (in parallel). So the clusters remove what the whole-mesh walk
 //! would remove first, wherever it is, and not a fixed share each. Rounds
-//! stop at `KEEP` of the input (or the target), each cluster's share of
-//! that capped so that none overshoots; then the states are written back.
+//! stop at `KEEP` of the input, each cluster's share of that capped so
+//! that none overshoots; then the states are written back.
 //!
 //! A contraction inside a cluster reads and changes only the fans of two
 //! interior vertices, i.e. the cluster's own triangles, and the state of
@@ -33,9 +33,10 @@
 //! cluster, then step, which keeps each cluster's order), and the whole
 //! mesh continues with the usual passes, the borders now free.
 //!
-//! Position-only runs with the pass schedule and without τ pairs take this
-//! path (feature edges, wedges and attribute quadrics keep the whole-mesh
-//! walk), on meshes of at least `MIN_CLUSTERS` clusters.
+//! Position-only runs with the pass schedule and without τ pairs, to at
+//! most `KEEP / 2` of the input, take this path (feature edges, wedges and
+//! attribute quadrics keep the whole-mesh walk), on meshes of at least
+//! `MIN_CLUSTERS` clusters.
 
 use super::{Pass, Simplifier, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
@@ -54,9 +55,14 @@ use smallvec::SmallVec;
 /// border) for a time gain of a few milliseconds.
 const MIN_CLUSTERS: usize = 8;
 
-/// A cluster stops at this fraction of its triangles (or the target ratio
-/// if that is higher): its held border is still at full resolution, and
-/// the whole-mesh passes that follow decide the rest with the borders free.
+/// The rounds stop at this fraction of the input: the held borders are
+/// still at full resolution there, so the clusters' interiors are a little
+/// coarser than the whole-mesh walk would leave them, and the whole-mesh
+/// passes that follow (with the borders free) must have room to even that
+/// out before the target: runs to more than half of it keep the
+/// whole-mesh walk. (On the 1.1M bench mesh, stopping at 10 % instead made
+/// its 10 % level's Hausdorff distance 0.041 % instead of 0.000007 %;
+/// at 20 % every level of 50 / 10 / 2 % matches the whole-mesh walk.)
 const KEEP: f64 = 0.2;
 
 /// At most this many rounds (the whole-mesh walk needs about ten passes
@@ -100,7 +106,7 @@ impl Simplifier {
             && self.log.records.is_empty()
             && self.pass.number == 0
             && self.live_tris == nt
-            && self.live_tris > self.target
+            && self.target as f64 <= KEEP / 2.0 * nt as f64
             && nt >= MIN_CLUSTERS.saturating_mul(size);
         // clusters of equal size, as close to `size` as divides evenly
         let count = (nt + size / 2) / size;
@@ -132,7 +138,7 @@ impl Simplifier {
         self.quadric = Vec::new();
         self.tris = Vec::new();
         self.tri_alive = Vec::new();
-        let stop = self.target.max((KEEP * nt as f64) as usize);
+        let stop = (KEEP * nt as f64) as usize;
         let mut live = self.live_tris;
         for _ in 0..MAX_ROUNDS {
             if live <= stop {
