@@ -319,6 +319,10 @@ impl BatchOutcome {
     pub fn built(&self) -> usize {
         self.count(|s| *s == Status::Built)
     }
+    /// Warnings of every built (or unchanged) file, from its report.
+    pub fn warnings(&self) -> usize {
+        self.files.iter().map(|f| file_warnings(f).len()).sum()
+    }
     fn count(&self, f: impl Fn(&Status) -> bool) -> usize {
         self.files.iter().filter(|o| f(&o.status)).count()
     }
@@ -371,11 +375,16 @@ impl BatchOutcome {
                     .flatten()
                     .filter_map(|l| l["hausdorff_percent"].as_f64())
                     .fold(None, |a: Option<f64>, e| Some(a.map_or(e, |a| a.max(e))));
-                let status = match &f.status {
+                let mut status = match &f.status {
                     Status::Built => "built".to_string(),
                     Status::Skipped => "unchanged".to_string(),
                     Status::Failed(_) => "FAILED".to_string(),
                 };
+                match file_warnings(f).len() {
+                    0 => {}
+                    1 => status += ", 1 warning",
+                    n => status += &format!(", {n} warnings"),
+                }
                 [
                     f.input.display().to_string(),
                     if r.is_some() {
@@ -445,6 +454,9 @@ impl BatchOutcome {
         for f in &self.files {
             if let Status::Failed(e) = &f.status {
                 s += &format!("FAILED {}: {e}\n", f.input.display());
+            }
+            for w in file_warnings(f) {
+                s += &format!("warning: {}: {w}\n", f.input.display());
             }
         }
         s
@@ -634,6 +646,15 @@ fn one_file(
     }
 }
 
+/// The warnings in a file's report (`report.warnings`).
+fn file_warnings(f: &FileOutcome) -> Vec<&str> {
+    f.report
+        .as_ref()
+        .and_then(|r| r["warnings"].as_array())
+        .map(|w| w.iter().filter_map(|w| w.as_str()).collect())
+        .unwrap_or_default()
+}
+
 /// Whether these arguments ask for batch mode: `--out-dir`, several inputs,
 /// a directory or a glob pattern.
 pub fn is_batch(args: &BuildArgs) -> bool {
@@ -647,8 +668,8 @@ pub fn is_batch(args: &BuildArgs) -> bool {
 
 /// `lodgen INPUT... --out-dir DIR`: run the batch, print progress (stderr)
 /// and the summary table (stdout) unless quiet, write `--report`; an error
-/// when any file failed.
-pub fn run(args: &BuildArgs) -> Result<()> {
+/// when any file failed; else the number of warnings.
+pub fn run(args: &BuildArgs) -> Result<usize> {
     let Some(out_dir) = &args.batch.out_dir else {
         bail!("several inputs or a directory need --out-dir DIR (batch mode)");
     };
@@ -690,5 +711,5 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             outcome.files.len()
         );
     }
-    Ok(())
+    Ok(outcome.warnings())
 }

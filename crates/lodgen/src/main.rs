@@ -13,6 +13,11 @@ use std::process::ExitCode;
 /// MSFT_lod) and a progressive mesh, by Garland–Heckbert quadric pair
 /// contraction that records every contraction as a vertex split.
 ///
+/// Exit codes: 0 written; 1 error (nothing written); 2 bad arguments;
+/// 3 written, with warnings (a part of the input left out or written
+/// unsimplified, each printed as `warning: FILE: PLACE: what`; --strict
+/// makes them errors).
+///
 /// Examples:
 ///   lodgen bunny.obj --levels 50%,10%,2% -o bunny.glb
 ///   lodgen scan.ply --max-error 0.1%,0.5%,2% --report scan.json
@@ -81,8 +86,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Inspect { file }) => lodgen::inspect::inspect(&file)
             .with_context(|| format!("inspecting {}", file.display()))
-            .map(|r| print!("{r}")),
-        Some(Command::Measure(m)) => cli::measure_files(&m.a, &m.b, m.samples, m.json),
+            .map(|r| print!("{r}"))
+            .map(|()| 0),
+        Some(Command::Measure(m)) => cli::measure_files(&m.a, &m.b, m.samples, m.json).map(|()| 0),
         Some(Command::View {
             file,
             port,
@@ -92,11 +98,14 @@ fn main() -> ExitCode {
         } else {
             lodgen::view::serve(&file, port)
         }
-        .with_context(|| format!("viewing {}", file.display())),
+        .with_context(|| format!("viewing {}", file.display()))
+        .map(|()| 0),
         None => run_build(cli.build),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(0) => ExitCode::SUCCESS,
+        // written, with warnings
+        Ok(_) => ExitCode::from(3),
         Err(e) => {
             eprintln!("error: {e}");
             for cause in e.chain().skip(1) {
@@ -107,7 +116,8 @@ fn main() -> ExitCode {
     }
 }
 
-fn run_build(args: BuildArgs) -> Result<()> {
+/// The build; returns the number of warnings.
+fn run_build(args: BuildArgs) -> Result<usize> {
     if lodgen::batch::is_batch(&args) {
         return lodgen::batch::run(&args);
     }

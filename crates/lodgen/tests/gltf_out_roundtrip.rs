@@ -605,7 +605,17 @@ fn gltf_origin_keeps_hierarchy_materials_and_images() {
     assert_eq!(
         animation["channels"].as_array().unwrap().len(),
         1,
-        "weights channel dropped"
+        "weights channel dropped (the mesh has no morph targets)"
+    );
+    // nothing dropped without a word: the instancing extension and the
+    // weights channel are named
+    let warnings: Vec<String> = summary.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(
+        warnings,
+        [
+            "nodes[1]: EXT_mesh_gpu_instancing dropped (it refers to the input's mesh data)",
+            "animations[0]: a weights channel of node 1, whose mesh has no morph targets, dropped",
+        ]
     );
     assert_eq!(animation["channels"][0]["target"]["path"], "translation");
     let sampler = &animation["samplers"][0];

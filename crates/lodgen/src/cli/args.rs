@@ -162,6 +162,15 @@ pub struct BuildArgs {
     #[arg(long, value_name = "N", default_value_t = lod::DEFAULT_MIN_TRIANGLES)]
     pub min_triangles: usize,
 
+    /// Fail instead of warning: a part of the input that would be left out
+    /// or written differently (a glTF primitive that cannot be read, points
+    /// or lines, a mesh that cannot be simplified and would be written
+    /// unsimplified, an animation or skin that cannot be carried) is an
+    /// error, and nothing is written. Without it such a file is written,
+    /// every warning is printed, and the exit code is 3.
+    #[arg(long)]
+    pub strict: bool,
+
     /// No table, no progress bar; errors only.
     #[arg(short, long)]
     pub quiet: bool,

@@ -9,7 +9,7 @@ use anyhow::{bail, Context, Result};
 use crate::gltf_out;
 use crate::io;
 use crate::lod::{self, MeshBuild, Progress};
-use crate::scene::Scene;
+use crate::scene::{LodMesh, Scene, Warning};
 
 use super::args::BuildArgs;
 
@@ -33,6 +33,9 @@ pub struct BuiltFile {
     pub level_bytes: Vec<Vec<u64>>,
     /// Wall time of reading, building (all meshes) and writing.
     pub times: FileTimes,
+    /// What was left out or written unsimplified, each naming the mesh /
+    /// primitive / animation (reader, builder and writer together).
+    pub warnings: Vec<Warning>,
 }
 
 /// Read → LODs → write (→ LODGEN_progressive) for one file, without
@@ -49,17 +52,26 @@ pub fn build_file(
     }
     on_progress(Progress::Reading);
     let t_read = Instant::now();
-    let scene = io::read_scene(input).with_context(|| format!("reading {}", input.display()))?;
+    let read_opts = io::ReadOptions {
+        strict: args.strict,
+    };
+    let scene = io::read_scene_with(input, &read_opts)
+        .with_context(|| format!("reading {}", input.display()))?;
     let read = t_read.elapsed();
+    let mut warnings = scene.warnings.clone();
     let t_build = Instant::now();
-    let builds = lod::build_lods(&scene, &opts, on_progress)
+    let (builds, lods) = build_isolated(&scene, &opts, args.strict, &mut warnings, on_progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
     let build = t_build.elapsed();
+    if args.progressive {
+        progressive_warnings(input, &scene, &builds, args.strict, &mut warnings)?;
+    }
     on_progress(Progress::Writing);
     let t_write = Instant::now();
-    let lods: Vec<_> = builds.iter().map(|b| b.lod.clone()).collect();
-    let summary = gltf_out::write_lods(output, &scene, &lods, &args.write_options())
+    let wopts = args.write_options();
+    let summary = gltf_out::write_lods_with(output, &scene, &lods, &wopts, args.strict)
         .with_context(|| format!("writing {}", output.display()))?;
+    warnings.extend(summary.warnings.iter().cloned());
     // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
     if args.progressive {
         let chains = builds
@@ -72,10 +84,11 @@ pub fn build_file(
     }
     // --- end LODGEN_progressive ---
     let write = t_write.elapsed();
-    let level_bytes: Vec<Vec<u64>> = summary
-        .meshes
+    // the simplified chains' bytes (the written chains are in source order)
+    let level_bytes: Vec<Vec<u64>> = builds
         .iter()
-        .map(|m| m.level_bytes.clone())
+        .filter_map(|b| lods.iter().position(|l| l.source == b.lod.source))
+        .filter_map(|j| summary.meshes.get(j).map(|m| m.level_bytes.clone()))
         .collect();
     Ok(BuiltFile {
         output: output.to_path_buf(),
@@ -83,5 +96,52 @@ pub fn build_file(
         builds,
         level_bytes,
         times: FileTimes { read, build, write },
+        warnings,
     })
+}
+
+/// The builds and every chain to write: with `strict` the first mesh that
+/// fails fails the file; else it is kept unsimplified, with a warning.
+fn build_isolated(
+    scene: &Scene,
+    opts: &lod::BuildOptions,
+    strict: bool,
+    warnings: &mut Vec<Warning>,
+    on_progress: &mut dyn FnMut(Progress),
+) -> Result<(Vec<MeshBuild>, Vec<LodMesh>), lod::BuildError> {
+    if strict {
+        let builds = lod::build_lods(scene, opts, on_progress)?;
+        let lods = builds.iter().map(|b| b.lod.clone()).collect();
+        return Ok((builds, lods));
+    }
+    let built = lod::build_lods_isolated(scene, opts, on_progress)?;
+    warnings.extend(built.warnings.iter().cloned());
+    let lods = built.lods();
+    Ok((built.builds, lods))
+}
+
+/// Morph targets are in every MSFT_lod level but not in the stream: a
+/// warning per such mesh (an error with `strict`).
+fn progressive_warnings(
+    input: &Path,
+    scene: &Scene,
+    builds: &[MeshBuild],
+    strict: bool,
+    warnings: &mut Vec<Warning>,
+) -> Result<()> {
+    for b in builds {
+        let mesh = &scene.meshes[b.lod.source];
+        if mesh.primitives.iter().any(|p| !p.targets.is_empty()) {
+            let w = Warning::new(
+                format!("meshes[{}] (mesh `{}`)", b.lod.source, mesh.name),
+                "its morph targets are in every MSFT_lod level but not in the \
+                 LODGEN_progressive stream",
+            );
+            if strict {
+                bail!("{}: {w} (--strict)", input.display());
+            }
+            warnings.push(w);
+        }
+    }
+    Ok(())
 }

@@ -26,12 +26,15 @@ impl BuiltFile {
             &self.level_bytes,
         );
         summary::extend_report(&mut report, self);
+        let warnings: Vec<String> = self.warnings.iter().map(|w| w.to_string()).collect();
+        report["warnings"] = warnings.into();
         report
     }
 }
 
-/// The main job. Prints the table (unless quiet) and writes the report.
-pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> {
+/// The main job. Prints the table (unless quiet) and writes the report;
+/// returns the number of warnings (each printed to stderr as `warning: …`).
+pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usize> {
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     let t0 = Instant::now();
     let bar = show_progress.then(|| {
@@ -91,7 +94,10 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<()> 
         write_atomically(path, serde_json::to_string_pretty(&json)?.as_bytes())
             .with_context(|| format!("writing the report {}", path.display()))?;
     }
-    Ok(())
+    for w in &built.warnings {
+        eprintln!("warning: {}: {w}", input.display());
+    }
+    Ok(built.warnings.len())
 }
 
 /// Why a simplification stopped short of its target, in words: where it

@@ -53,6 +53,8 @@ pub(super) struct Builder {
     pub(super) views: Vec<View>,
     pub(super) accessors: Vec<Value>,
     pub(super) meshes: Vec<Value>,
+    /// What of the input is not carried into the output, in words.
+    pub(super) warnings: Vec<crate::scene::Warning>,
 }
 
 pub(super) fn align4(v: &mut Vec<u8>) {
@@ -70,6 +72,7 @@ impl Builder {
             views: Vec::new(),
             accessors: Vec::new(),
             meshes: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
@@ -174,10 +177,10 @@ impl Builder {
                 bytes += b;
                 primitives.push(value);
             }
-            self.meshes.push(json!({
-                "name": format!("{}_LOD{k}", chain.name),
-                "primitives": primitives,
-            }));
+            let mut mesh = chain.carried.clone();
+            mesh.insert("name".into(), format!("{}_LOD{k}", chain.name).into());
+            mesh.insert("primitives".into(), primitives.into());
+            self.meshes.push(Value::Object(mesh));
             meshes.push(self.meshes.len() - 1);
             level_bytes.push(bytes as u64);
         }
@@ -248,7 +251,62 @@ impl Builder {
         if let Some(m) = p.material {
             prim["material"] = m.into();
         }
+        if !p.targets.is_empty() {
+            let (targets, b) = self.add_targets(segment, p, dequant.1)?;
+            total += b;
+            prim["targets"] = targets;
+        }
         Ok((prim, total))
+    }
+
+    /// The morph targets: float VEC3 displacements (POSITION with min/max;
+    /// with `quantize` in the dequantization cube's units, `1 / half`).
+    fn add_targets(
+        &mut self,
+        segment: usize,
+        p: &Prepared,
+        half: f64,
+    ) -> Result<(Value, usize), WriteError> {
+        let scale = if self.opts.quantize {
+            (1.0 / half.max(f64::MIN_POSITIVE)) as f32
+        } else {
+            1.0
+        };
+        let mut total = 0;
+        let mut targets = Vec::with_capacity(p.targets.len());
+        for t in &p.targets {
+            let mut target = Map::new();
+            for (name, d) in t.channels() {
+                let scaled: Vec<[f32; 3]> = match name {
+                    "POSITION" => d.iter().map(|v| v.map(|c| c * scale)).collect(),
+                    _ => d.clone(),
+                };
+                let bytes = scaled
+                    .iter()
+                    .flatten()
+                    .flat_map(|c| c.to_le_bytes())
+                    .collect();
+                let (view, b) = self.view(segment, Payload::Attribute { bytes, stride: 12 })?;
+                total += b;
+                let mut acc = json!({"bufferView": view, "componentType": FLOAT,
+                                     "count": scaled.len(), "type": "VEC3"});
+                if name == "POSITION" {
+                    let mut min = [f32::INFINITY; 3];
+                    let mut max = [f32::NEG_INFINITY; 3];
+                    for v in &scaled {
+                        for k in 0..3 {
+                            min[k] = min[k].min(v[k]);
+                            max[k] = max[k].max(v[k]);
+                        }
+                    }
+                    acc["min"] = json!(min);
+                    acc["max"] = json!(max);
+                }
+                target.insert(name.into(), self.accessor(acc).into());
+            }
+            targets.push(Value::Object(target));
+        }
+        Ok((targets.into(), total))
     }
 
     /// POSITION: `i16` normalized in the chain's dequantization cube with

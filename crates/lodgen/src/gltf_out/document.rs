@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
-use crate::scene::{LodMesh, Scene};
+use crate::scene::{LodMesh, Scene, Warning};
 
 use super::builder::Builder;
 use super::error::WriteError;
@@ -105,8 +105,72 @@ pub(super) fn gltf_document(
     }
     embed_images(&mut root, input_path, document, buffers, out)?;
     let quantize = out.opts.quantize;
-    attach_chains(&mut root, document, lods, chains, chain_meshes, quantize)?;
+    let warnings = &mut out.warnings;
+    attach_chains(
+        &mut root,
+        document,
+        lods,
+        chains,
+        chain_meshes,
+        quantize,
+        warnings,
+    )?;
     Ok(root)
+}
+
+fn has_targets(chain: &PreparedChain) -> bool {
+    chain.levels.iter().flatten().any(|p| !p.targets.is_empty())
+}
+
+/// `weights` animation channels follow the mesh to the node it moved to;
+/// those whose node draws no morph targets are dropped with a warning (and
+/// an animation left without a channel).
+fn retarget_weight_channels(
+    root: &mut Map<String, Value>,
+    moved_to: &[(usize, usize)],
+    morphed: &[usize],
+    warnings: &mut Vec<Warning>,
+) {
+    let Some(Value::Array(animations)) = root.get_mut("animations") else {
+        return;
+    };
+    for (a, animation) in animations.iter_mut().enumerate() {
+        let Some(channels) = animation.get_mut("channels").and_then(Value::as_array_mut) else {
+            continue;
+        };
+        channels.retain_mut(|c| {
+            if c.pointer("/target/path").and_then(Value::as_str) != Some("weights") {
+                return true;
+            }
+            let node = c
+                .pointer("/target/node")
+                .and_then(Value::as_u64)
+                .unwrap_or(u64::MAX);
+            let to = moved_to
+                .iter()
+                .find(|(from, _)| *from as u64 == node)
+                .map_or(node, |&(_, to)| to as u64);
+            if morphed.iter().any(|&m| m as u64 == to) {
+                c["target"]["node"] = to.into();
+                return true;
+            }
+            warnings.push(Warning::new(
+                format!("animations[{a}]"),
+                format!(
+                    "a weights channel of node {node}, whose mesh has no morph targets, dropped"
+                ),
+            ));
+            false
+        });
+    }
+    animations.retain(|a| {
+        a.get("channels")
+            .and_then(Value::as_array)
+            .is_some_and(|c| !c.is_empty())
+    });
+    if animations.is_empty() {
+        root.remove("animations");
+    }
 }
 
 /// Nodes: each node with a mesh gets that mesh's chain (with `quantize`, on
@@ -118,6 +182,7 @@ fn attach_chains(
     chains: &[PreparedChain],
     chain_meshes: &[Vec<usize>],
     quantize: bool,
+    warnings: &mut Vec<Warning>,
 ) -> Result<(), WriteError> {
     let mut chain_of = vec![usize::MAX; document.meshes.len()];
     for (c, lod) in lods.iter().enumerate() {
@@ -129,10 +194,19 @@ fn attach_chains(
         Some(Value::Array(n)) => n,
         _ => Vec::new(),
     };
-    for node in &mut nodes {
+    for (i, node) in nodes.iter_mut().enumerate() {
         // Node extensions that point at mesh data (instancing accessors) or
         // at the input's own LOD chains no longer apply.
         if let Some(Value::Object(ext)) = node.get_mut("extensions") {
+            for k in ext
+                .keys()
+                .filter(|k| DROPPED_EXTENSIONS.contains(&k.as_str()))
+            {
+                warnings.push(Warning::new(
+                    format!("nodes[{i}]"),
+                    format!("{k} dropped (it refers to the input's mesh data)"),
+                ));
+            }
             ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
             if ext.is_empty() {
                 if let Some(obj) = node.as_object_mut() {
@@ -142,37 +216,50 @@ fn attach_chains(
         }
     }
     let original_count = nodes.len();
+    // with `quantize`, the node whose mesh moves to a new child: its morph
+    // weights (and their animation channels) go with the mesh
+    let mut moved_to: Vec<(usize, usize)> = Vec::new();
+    // the nodes that draw a mesh with morph targets, as written
+    let mut morphed: Vec<usize> = Vec::new();
     for i in 0..original_count {
         let Some(mesh) = nodes[i].get("mesh").and_then(Value::as_u64) else {
             continue;
         };
-        let at = format!("/nodes/{i}");
-        let c = *chain_of
-            .get(mesh as usize)
-            .filter(|&&c| c != usize::MAX)
-            .ok_or_else(|| input_err(at.clone(), format!("mesh {mesh} has no LOD chain")))?;
+        let Some(&c) = chain_of.get(mesh as usize).filter(|&&c| c != usize::MAX) else {
+            // the reader left the mesh out (and said so): the node keeps
+            // its place in the tree without it
+            if let Some(obj) = nodes[i].as_object_mut() {
+                obj.remove("mesh");
+                obj.remove("weights");
+            }
+            continue;
+        };
         let chain = &chains[c];
         debug_assert_eq!(chain.source, mesh as usize);
         let name = nodes[i]
             .get("name")
             .and_then(Value::as_str)
             .map_or_else(|| chain.name.clone(), String::from);
-        if let Some(obj) = nodes[i].as_object_mut() {
-            if quantize {
-                obj.remove("skin");
-            }
-            obj.remove("weights");
-        }
         if quantize {
             // The dequantization lives on new child nodes.
+            let mut weights = None;
             if let Some(obj) = nodes[i].as_object_mut() {
                 obj.remove("mesh");
+                obj.remove("skin");
+                weights = obj.remove("weights");
             }
-            let transform = dequant_transform(chain, true);
+            let mut transform = dequant_transform(chain, true);
+            if let Some(w) = weights {
+                transform.insert("weights".into(), w);
+            }
             let mut node = transform.clone();
             node.insert("name".into(), format!("{name}_LOD0").into());
             nodes.push(Value::Object(node));
             let first = nodes.len() - 1;
+            moved_to.push((i, first));
+            if has_targets(chain) {
+                morphed.push(first);
+            }
             match nodes[i].get_mut("children") {
                 Some(Value::Array(children)) => children.push(first.into()),
                 _ => nodes[i]["children"] = json!([first]),
@@ -186,6 +273,11 @@ fn attach_chains(
                 &transform,
             );
         } else {
+            if has_targets(chain) {
+                morphed.push(i);
+            } else if let Some(obj) = nodes[i].as_object_mut() {
+                obj.remove("weights");
+            }
             let template = nodes[i].as_object().cloned().unwrap_or_default();
             add_lod_nodes(
                 &mut nodes,
@@ -197,6 +289,7 @@ fn attach_chains(
             );
         }
     }
+    retarget_weight_channels(root, &moved_to, &morphed, warnings);
     if !nodes.is_empty() {
         root.insert("nodes".into(), nodes.into());
     }

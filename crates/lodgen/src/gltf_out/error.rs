@@ -61,4 +61,7 @@ pub enum WriteError {
     Compress(String),
     #[error("the output exceeds the 4 GiB GLB limit")]
     TooLarge,
+    /// `--strict`: something of the input would not be carried over.
+    #[error("{0} (--strict)")]
+    Strict(crate::scene::Warning),
 }

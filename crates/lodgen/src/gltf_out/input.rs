@@ -9,6 +9,8 @@ use serde_json::{Map, Value};
 
 use super::builder::{Builder, Payload, SHARED};
 use super::error::WriteError;
+use super::prepare::PreparedChain;
+use crate::scene::Warning;
 
 /// An error in the input document at JSON path `path`.
 pub(super) fn input_err(path: String, reason: String) -> WriteError {
@@ -120,7 +122,15 @@ pub(super) fn keep_skins(
     out: &mut Builder,
 ) -> Result<(), WriteError> {
     let mut skins = take_array(root, "skins");
-    if out.opts.quantize {
+    if out.opts.quantize && !skins.is_empty() {
+        out.warnings.push(Warning::new(
+            "skins",
+            format!(
+                "{} skin(s) dropped: --quantize puts the dequantization in node transforms, \
+                 which skinning ignores (write without --quantize to keep them)",
+                skins.len()
+            ),
+        ));
         skins.clear();
     }
     for (k, skin) in skins.iter_mut().enumerate() {
@@ -153,39 +163,113 @@ pub(super) fn keep_animations(
     out: &mut Builder,
 ) {
     let mut animations = take_array(root, "animations");
-    animations.retain_mut(|animation| {
+    let mut kept = Vec::with_capacity(animations.len());
+    for (i, mut animation) in animations.drain(..).enumerate() {
+        let at = format!("animations[{i}]");
         if let Some(Value::Array(channels)) = animation.get_mut("channels") {
-            channels.retain(|c| {
-                c.pointer("/target/path").and_then(Value::as_str) != Some("weights")
-                    && c.pointer("/target/node").is_some()
-            });
+            let before = channels.len();
+            channels.retain(|c| c.pointer("/target/node").is_some());
+            if channels.len() < before {
+                out.warnings.push(Warning::new(
+                    at.clone(),
+                    format!(
+                        "{} channel(s) without a target node dropped",
+                        before - channels.len()
+                    ),
+                ));
+            }
         }
         let has_channels = animation
             .get("channels")
             .and_then(Value::as_array)
             .is_some_and(|c| !c.is_empty());
-        let Some(Value::Array(samplers)) = animation.get_mut("samplers") else {
-            return false;
-        };
-        has_channels
-            && samplers.iter_mut().all(|sampler| {
+        let copied = match animation.get_mut("samplers") {
+            Some(Value::Array(samplers)) => samplers.iter_mut().all(|sampler| {
                 ["input", "output"].iter().all(|key| {
                     let copied = sampler.get(*key).and_then(Value::as_u64).and_then(|a| {
                         copy_accessor(a as usize, in_accessors, in_buffer_views, buffers, out)
                     });
-                    match copied {
-                        Some(new) => {
-                            sampler[*key] = new.into();
-                            true
-                        }
-                        None => false,
-                    }
+                    copied.map(|new| sampler[*key] = new.into()).is_some()
                 })
-            })
-    });
-    if !animations.is_empty() {
-        root.insert("animations".into(), animations.into());
+            }),
+            _ => false,
+        };
+        if has_channels && copied {
+            kept.push(animation);
+        } else {
+            out.warnings.push(Warning::new(
+                at,
+                "dropped: no channel left, or a sampler's data cannot be copied (sparse or missing)",
+            ));
+        }
     }
+    if !kept.is_empty() {
+        root.insert("animations".into(), kept.into());
+    }
+}
+
+/// Every level's mesh of a chain carries the input mesh's `weights`,
+/// `extras` (with `targetNames`) and `extensions`; primitive-level extras
+/// and extensions cannot follow (a level's primitives are new) and are
+/// named in a warning, as are `weights` that no longer match the targets.
+pub(super) fn carry_mesh_properties(
+    document: &gltf_json::Root,
+    chains: &mut [PreparedChain],
+    warnings: &mut Vec<Warning>,
+) -> Result<(), WriteError> {
+    for chain in chains {
+        let Some(mesh) = document.meshes.get(chain.source) else {
+            continue;
+        };
+        let (m, name) = (chain.source, &chain.name);
+        let at = format!("meshes[{m}] (mesh `{name}`)");
+        let Value::Object(mut mesh) = serde_json::to_value(mesh)? else {
+            continue;
+        };
+        for key in ["weights", "extras", "extensions"] {
+            if let Some(v) = mesh.remove(key) {
+                chain.carried.insert(key.into(), v);
+            }
+        }
+        let targets = chain.levels[0].first().map_or(0, |p| p.targets.len());
+        let weights = chain
+            .carried
+            .get("weights")
+            .and_then(Value::as_array)
+            .map(Vec::len);
+        if weights.is_some_and(|w| w != targets) {
+            chain.carried.remove("weights");
+            warnings.push(Warning::new(
+                at.clone(),
+                format!("weights dropped: {targets} morph target(s) were read"),
+            ));
+        }
+        for (i, p) in mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            let mut lost: Vec<&str> = Vec::new();
+            if p.get("extras").is_some_and(|e| !e.is_null()) {
+                lost.push("extras");
+            }
+            if let Some(Value::Object(ext)) = p.get("extensions") {
+                lost.extend(ext.keys().map(String::as_str));
+            }
+            if !lost.is_empty() {
+                warnings.push(Warning::new(
+                    format!("meshes[{m}].primitives[{i}] (mesh `{name}`)"),
+                    format!(
+                        "{} not carried (a level's primitives are new)",
+                        lost.join(", ")
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Images: copies buffer-view images and embeds external files into the

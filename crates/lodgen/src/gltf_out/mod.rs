@@ -91,6 +91,19 @@ pub fn write_lods(
     lods: &[LodMesh],
     opts: &WriteOptions,
 ) -> Result<WriteSummary, WriteError> {
+    write_lods_with(path, scene, lods, opts, false)
+}
+
+/// [`write_lods`]; with `strict`, a part of the input that would not be
+/// carried over (a [`WriteSummary::warnings`] entry) is an error instead,
+/// and nothing is written.
+pub fn write_lods_with(
+    path: &Path,
+    scene: &Scene,
+    lods: &[LodMesh],
+    opts: &WriteOptions,
+    strict: bool,
+) -> Result<WriteSummary, WriteError> {
     let format = match path.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("glb") => Format::Glb,
         Some(e) if e.eq_ignore_ascii_case("gltf") => Format::Gltf,
@@ -104,10 +117,15 @@ pub fn write_lods(
         Origin::Flat => scene.materials.len(),
         Origin::Gltf { document, .. } => document.materials.len(),
     };
-    let chains = prepare_chains(scene, lods, material_count)?;
+    let mut chains = prepare_chains(scene, lods, material_count)?;
+    let mut warnings = Vec::new();
+    if let Origin::Gltf { document, .. } = &scene.origin {
+        input::carry_mesh_properties(document, &mut chains, &mut warnings)?;
+    }
     let level_count = chains.iter().map(|c| c.levels.len()).max().unwrap_or(0);
 
     let mut out = Builder::new(level_count, opts);
+    out.warnings = warnings;
     let mut summary = WriteSummary::default();
     let mut chain_meshes = Vec::with_capacity(chains.len());
     for chain in &chains {
@@ -141,6 +159,10 @@ pub fn write_lods(
         .and_then(|s| s.to_str())
         .unwrap_or("lodgen")
         .to_string();
+    summary.warnings = std::mem::take(&mut out.warnings);
+    if let (true, Some(w)) = (strict, summary.warnings.first()) {
+        return Err(WriteError::Strict(w.clone()));
+    }
     let files = out.finish(&mut root, format, path, &stem)?;
     write_atomically(&files)?;
     summary.files = files

@@ -1,7 +1,7 @@
 //! The `MSFT_lod` chain in the node tree: the finest level's node gets
 //! `MSFT_lod.ids` and `MSFT_screencoverage`, the coarser levels become
 //! sibling nodes outside the scene, with the chain's dequantization transform
-//! when quantizing.
+//! when quantizing (or the finest node's transform, skin and morph weights).
 
 use serde_json::{json, Map, Value};
 
@@ -22,7 +22,14 @@ pub(super) fn add_lod_nodes(
     let mut ids = Vec::with_capacity(meshes.len().saturating_sub(1));
     for (k, &mesh) in meshes.iter().enumerate().skip(1) {
         let mut node = Map::new();
-        for key in ["matrix", "translation", "rotation", "scale", "skin"] {
+        for key in [
+            "matrix",
+            "translation",
+            "rotation",
+            "scale",
+            "skin",
+            "weights",
+        ] {
             if let Some(v) = template.get(key) {
                 node.insert(key.into(), v.clone());
             }

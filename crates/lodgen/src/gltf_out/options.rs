@@ -30,6 +30,9 @@ pub struct WriteSummary {
     pub meshes: Vec<MeshSummary>,
     /// Every file written with its size in bytes; the main file first.
     pub files: Vec<(PathBuf, u64)>,
+    /// What of a glTF input could not be carried into the output, each
+    /// naming its place (nothing is dropped without one).
+    pub warnings: Vec<crate::scene::Warning>,
 }
 
 /// Bytes of one chain.

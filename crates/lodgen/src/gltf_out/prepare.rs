@@ -2,7 +2,7 @@
 //! [`LevelProblem`]s), computes missing normals, applies meshopt's vertex
 //! cache and fetch order, and the chain's dequantization box.
 
-use crate::scene::{LodMesh, Primitive, Scene};
+use crate::scene::{LodMesh, MorphTarget, Primitive, Scene};
 
 use super::error::{LevelProblem, WriteError};
 
@@ -20,6 +20,7 @@ pub(super) struct Prepared {
     pub(super) extra_colors: Vec<Vec<[f32; 4]>>,
     pub(super) extra_joints: Vec<Vec<[u16; 4]>>,
     pub(super) extra_weights: Vec<Vec<[f32; 4]>>,
+    pub(super) targets: Vec<MorphTarget>,
     pub(super) indices: Vec<u32>,
 }
 
@@ -31,6 +32,9 @@ pub(super) struct PreparedChain {
     pub(super) coverages: Vec<f64>,
     /// Dequantization (center, uniform half extent) over all levels.
     pub(super) dequant: ([f64; 3], f64),
+    /// Properties of the input mesh every level's mesh carries (`weights`,
+    /// `extras` with `targetNames`, `extensions`); empty for flat input.
+    pub(super) carried: serde_json::Map<String, serde_json::Value>,
 }
 
 pub(super) fn prepare_chains(
@@ -97,6 +101,7 @@ pub(super) fn prepare_chains(
             levels,
             coverages,
             dequant,
+            carried: serde_json::Map::new(),
         });
     }
     Ok(chains)
@@ -146,6 +151,15 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
         extra_colors: p.extra_colors.iter().map(|v| reorder(v, &order)).collect(),
         extra_joints: p.extra_joints.iter().map(|v| reorder(v, &order)).collect(),
         extra_weights: p.extra_weights.iter().map(|v| reorder(v, &order)).collect(),
+        targets: p
+            .targets
+            .iter()
+            .map(|t| MorphTarget {
+                positions: t.positions.as_deref().map(|v| reorder(v, &order)),
+                normals: t.normals.as_deref().map(|v| reorder(v, &order)),
+                tangents: t.tangents.as_deref().map(|v| reorder(v, &order)),
+            })
+            .collect(),
         indices,
     }))
 }
@@ -228,6 +242,9 @@ fn validate(p: &Primitive, material_count: usize) -> Result<(), LevelProblem> {
     }
     for j in &p.extra_joints {
         check_len("JOINTS_n", j.len())?;
+    }
+    for (_, d) in p.targets.iter().flat_map(MorphTarget::channels) {
+        finite(&Some(d.clone()), "morph target", &check_len)?;
     }
     if let Some(vertex) = p
         .positions

@@ -20,11 +20,11 @@
 
 use std::path::{Path, PathBuf};
 
-use gltf::json::accessor::{ComponentType, GenericComponentType, IndexComponentType, Type};
 use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::Checked;
 use gltf::json::Root;
 
+use super::gltf_data::{decode_base64, fan_to_list, percent_decode, strip_to_list};
 use super::{check_not_empty, ErrorKind, Location, ReadError, ReadOptions};
 use crate::scene::{Material, MorphTarget, Origin, Primitive, Scene, SourceMesh, Warning};
 
@@ -148,13 +148,13 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     Ok(scene)
 }
 
-struct Reader<'a> {
-    path: &'a Path,
+pub(super) struct Reader<'a> {
+    pub(super) path: &'a Path,
     /// A primitive or mesh that cannot be read is an error, not a warning.
     strict: bool,
     /// Bytes the reader may still allocate for decoded accessors (the
     /// memory cap, [`super::DECODED_BYTES_PER_INPUT_BYTE`]).
-    budget: std::cell::Cell<u64>,
+    pub(super) budget: std::cell::Cell<u64>,
 }
 
 fn le_u32(b: &[u8], at: usize) -> Option<u32> {
@@ -163,11 +163,11 @@ fn le_u32(b: &[u8], at: usize) -> Option<u32> {
 }
 
 impl Reader<'_> {
-    fn err(&self, location: Location, kind: ErrorKind) -> ReadError {
+    pub(super) fn err(&self, location: Location, kind: ErrorKind) -> ReadError {
         ReadError::new(self.path, location, kind)
     }
 
-    fn json_err(&self, at: &str, message: String) -> ReadError {
+    pub(super) fn json_err(&self, at: &str, message: String) -> ReadError {
         self.err(Location::Json(at.to_owned()), ErrorKind::Invalid(message))
     }
 
@@ -405,214 +405,6 @@ impl Reader<'_> {
         out.material = p.material()?;
         Ok(Some(out))
     }
-
-    fn same_count<T>(
-        &self,
-        v: Vec<T>,
-        n: usize,
-        at: &str,
-        name: &str,
-    ) -> Result<Vec<T>, ReadError> {
-        if v.len() != n {
-            return Err(self.json_err(
-                &format!("{at}.attributes.{name}"),
-                format!("{name} has {} entries, POSITION has {n}", v.len()),
-            ));
-        }
-        Ok(v)
-    }
-
-    /// Reads accessor `index` as `N`-component float vectors.
-    fn vectors<const N: usize>(
-        &self,
-        root: &Root,
-        buffers: &[Vec<u8>],
-        index: usize,
-        at: &str,
-    ) -> Result<Vec<[f32; N]>, ReadError> {
-        let (values, dims) = self.accessor(root, buffers, index, at)?;
-        if dims != N {
-            return Err(self.json_err(
-                at,
-                format!("accessor {index} has {dims} components, expected {N}"),
-            ));
-        }
-        let out: Vec<[f32; N]> = values
-            .chunks_exact(N)
-            .map(|c| std::array::from_fn(|k| c[k] as f32))
-            .collect();
-        if let Some(i) = out.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
-            let value = out[i]
-                .into_iter()
-                .find(|x| !x.is_finite())
-                .unwrap_or(f32::NAN);
-            let name = at.rsplit('.').next().unwrap_or(at);
-            return Err(self.err(
-                Location::Json(format!("{at}[{i}]")),
-                ErrorKind::NonFinite {
-                    what: format!("{name} of vertex {i} (accessor {index})"),
-                    value,
-                },
-            ));
-        }
-        Ok(out)
-    }
-
-    /// Reads every component of accessor `index` (sparse applied,
-    /// normalized integers mapped to [-1, 1] / [0, 1]); returns the flat
-    /// values and the number of components per element.
-    fn accessor(
-        &self,
-        root: &Root,
-        buffers: &[Vec<u8>],
-        index: usize,
-        at: &str,
-    ) -> Result<(Vec<f64>, usize), ReadError> {
-        let here = format!("{at} (accessors[{index}])");
-        let bad = |message: String| self.json_err(&here, message);
-        let acc = root
-            .accessors
-            .get(index)
-            .ok_or_else(|| bad("accessor does not exist".to_owned()))?;
-        let Checked::Valid(GenericComponentType(ct)) = acc.component_type else {
-            return Err(bad("invalid componentType".to_owned()));
-        };
-        let dims = match acc.type_ {
-            Checked::Valid(Type::Scalar) => 1,
-            Checked::Valid(Type::Vec2) => 2,
-            Checked::Valid(Type::Vec3) => 3,
-            Checked::Valid(Type::Vec4) => 4,
-            _ => return Err(bad("accessor type is not SCALAR or VEC2..4".to_owned())),
-        };
-        let count = usize::try_from(acc.count.0).unwrap_or(usize::MAX);
-        let elem = component_size(ct) * dims;
-        // Check the data is there before allocating for it.
-        let data = match acc.buffer_view {
-            Some(view) => {
-                let offset = acc.byte_offset.map_or(0, |o| o.0);
-                Some(self.view(root, buffers, view.value(), offset, count, elem, &here)?)
-            }
-            None => None,
-        };
-        // f64 values, then the caller's f32 copy: 12 bytes per component
-        let bytes = (count as u64).saturating_mul(dims as u64 * 12);
-        if bytes > self.budget.get() {
-            return Err(bad(format!(
-                "{count} elements would pass the reader's memory cap ({} bytes per byte of \
-                 input, {} bytes left)",
-                super::DECODED_BYTES_PER_INPUT_BYTE,
-                self.budget.get()
-            )));
-        }
-        self.budget.set(self.budget.get() - bytes);
-        let mut values = vec![0.0f64; count * dims];
-        if let Some((data, stride)) = data {
-            for i in 0..count {
-                read_element(
-                    &data[i * stride..],
-                    ct,
-                    dims,
-                    acc.normalized,
-                    &mut values[i * dims..(i + 1) * dims],
-                );
-            }
-        }
-        if let Some(sparse) = &acc.sparse {
-            let n = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
-            let Checked::Valid(IndexComponentType(ict)) = sparse.indices.component_type else {
-                return Err(bad("invalid sparse index componentType".to_owned()));
-            };
-            let isize_ = component_size(ict);
-            let (idata, _) = self.view(
-                root,
-                buffers,
-                sparse.indices.buffer_view.value(),
-                sparse.indices.byte_offset.0,
-                n,
-                isize_,
-                &here,
-            )?;
-            let (vdata, _) = self.view(
-                root,
-                buffers,
-                sparse.values.buffer_view.value(),
-                sparse.values.byte_offset.0,
-                n,
-                elem,
-                &here,
-            )?;
-            let mut target = [0.0f64; 1];
-            for k in 0..n {
-                read_element(&idata[k * isize_..], ict, 1, false, &mut target);
-                let i = target[0] as usize;
-                if i >= count {
-                    return Err(bad(format!(
-                        "sparse index {i} is out of range ({count} elements)"
-                    )));
-                }
-                read_element(
-                    &vdata[k * elem..],
-                    ct,
-                    dims,
-                    acc.normalized,
-                    &mut values[i * dims..(i + 1) * dims],
-                );
-            }
-        }
-        Ok((values, dims))
-    }
-
-    /// The bytes of buffer view `view` starting at `offset`, checked to
-    /// hold `count` elements of `elem` bytes; returns them and the stride.
-    #[allow(clippy::too_many_arguments)]
-    fn view<'b>(
-        &self,
-        root: &Root,
-        buffers: &'b [Vec<u8>],
-        view: usize,
-        offset: u64,
-        count: usize,
-        elem: usize,
-        here: &str,
-    ) -> Result<(&'b [u8], usize), ReadError> {
-        let bad = |message: String| self.json_err(here, message);
-        let bv = root
-            .buffer_views
-            .get(view)
-            .ok_or_else(|| bad(format!("bufferView {view} does not exist")))?;
-        let buffer = buffers
-            .get(bv.buffer.value())
-            .ok_or_else(|| bad(format!("buffer {} does not exist", bv.buffer.value())))?;
-        let stride = bv.byte_stride.map_or(elem, |s| s.0);
-        if stride < elem {
-            return Err(bad(format!(
-                "byteStride {stride} is smaller than an element ({elem} bytes)"
-            )));
-        }
-        let view_start = bv.byte_offset.map_or(0, |o| o.0);
-        let view_end = view_start.checked_add(bv.byte_length.0);
-        let needed = match count {
-            0 => Some(0u64),
-            c => (stride as u64)
-                .checked_mul(c as u64 - 1)
-                .and_then(|x| x.checked_add(elem as u64)),
-        };
-        let start = view_start.checked_add(offset);
-        let end = start.zip(needed).and_then(|(s, n)| s.checked_add(n));
-        match (start, end, view_end) {
-            (Some(start), Some(end), Some(view_end)) if end <= view_end && view_end <= buffer.len() as u64 => {
-                Ok((&buffer[start as usize..end as usize], stride))
-            }
-            _ => Err(self.err(
-                Location::Json(here.to_owned()),
-                ErrorKind::Truncated(format!(
-                    "{count} elements of {elem} bytes do not fit in bufferView {view} (buffer {}, {} bytes)",
-                    bv.buffer.value(),
-                    buffer.len()
-                )),
-            )),
-        }
-    }
 }
 
 /// One primitive being read, and where it is (`meshes[m].primitives[p]`).
@@ -830,152 +622,5 @@ impl PrimitiveReader<'_> {
             )),
             _ => Ok(material),
         }
-    }
-}
-
-fn component_size(ct: ComponentType) -> usize {
-    match ct {
-        ComponentType::I8 | ComponentType::U8 => 1,
-        ComponentType::I16 | ComponentType::U16 => 2,
-        ComponentType::U32 | ComponentType::F32 => 4,
-    }
-}
-
-/// Decodes one little-endian element of `out.len() == dims` components.
-/// `data` must hold at least one element (checked by `Reader::view`).
-fn read_element(data: &[u8], ct: ComponentType, dims: usize, normalized: bool, out: &mut [f64]) {
-    let size = component_size(ct);
-    debug_assert!(data.len() >= size * dims);
-    for (k, slot) in out.iter_mut().enumerate().take(dims) {
-        let b = &data[k * size..(k + 1) * size];
-        *slot = match ct {
-            ComponentType::I8 => {
-                let v = b[0] as i8 as f64;
-                if normalized {
-                    (v / 127.0).max(-1.0)
-                } else {
-                    v
-                }
-            }
-            ComponentType::U8 => {
-                let v = b[0] as f64;
-                if normalized {
-                    v / 255.0
-                } else {
-                    v
-                }
-            }
-            ComponentType::I16 => {
-                let v = i16::from_le_bytes([b[0], b[1]]) as f64;
-                if normalized {
-                    (v / 32767.0).max(-1.0)
-                } else {
-                    v
-                }
-            }
-            ComponentType::U16 => {
-                let v = u16::from_le_bytes([b[0], b[1]]) as f64;
-                if normalized {
-                    v / 65535.0
-                } else {
-                    v
-                }
-            }
-            ComponentType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            ComponentType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-        };
-    }
-}
-
-/// glTF triangle strip to list: triangle `i` is
-/// `(v[i], v[i + 1 + i % 2], v[i + 2 - i % 2])` (glTF 2.0 §3.7.2.1).
-pub(crate) fn strip_to_list(v: &[u32]) -> Vec<u32> {
-    let mut out = Vec::with_capacity(v.len().saturating_sub(2) * 3);
-    for i in 0..v.len().saturating_sub(2) {
-        out.extend_from_slice(&[v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]]);
-    }
-    out
-}
-
-/// glTF triangle fan to list: triangle `i` is `(v[i + 1], v[i + 2], v[0])`.
-pub(crate) fn fan_to_list(v: &[u32]) -> Vec<u32> {
-    let mut out = Vec::with_capacity(v.len().saturating_sub(2) * 3);
-    for i in 0..v.len().saturating_sub(2) {
-        out.extend_from_slice(&[v[i + 1], v[i + 2], v[0]]);
-    }
-    out
-}
-
-/// Standard base64 (padding optional); `None` on any invalid character.
-fn decode_base64(s: &str) -> Option<Vec<u8>> {
-    let s = s.trim_end_matches('=');
-    let mut out = Vec::with_capacity(s.len() * 3 / 4);
-    let mut acc = 0u32;
-    let mut bits = 0;
-    for c in s.bytes() {
-        let v = match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' | b'-' => 62,
-            b'/' | b'_' => 63,
-            _ => return None,
-        };
-        acc = (acc << 6) | v as u32;
-        bits += 6;
-        if bits >= 8 {
-            bits -= 8;
-            out.push((acc >> bits) as u8);
-            acc &= (1 << bits) - 1;
-        }
-    }
-    Some(out)
-}
-
-/// Decodes `%XX` escapes of a relative URI; `None` if malformed.
-fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn base64_round_values() {
-        assert_eq!(decode_base64("TWFu").as_deref(), Some(&b"Man"[..]));
-        assert_eq!(decode_base64("TWE=").as_deref(), Some(&b"Ma"[..]));
-        assert_eq!(decode_base64("TQ==").as_deref(), Some(&b"M"[..]));
-        assert_eq!(decode_base64("T!=="), None);
-    }
-
-    #[test]
-    fn strip_and_fan_follow_the_spec() {
-        assert_eq!(
-            strip_to_list(&[0, 1, 2, 3, 4]),
-            vec![0, 1, 2, 1, 3, 2, 2, 3, 4]
-        );
-        assert_eq!(fan_to_list(&[0, 1, 2, 3]), vec![1, 2, 0, 2, 3, 0]);
-        assert!(strip_to_list(&[0, 1]).is_empty());
-    }
-
-    #[test]
-    fn percent_decoding() {
-        assert_eq!(percent_decode("a%20b.bin").as_deref(), Some("a b.bin"));
-        assert_eq!(percent_decode("a%2"), None);
-        assert_eq!(percent_decode("%FF"), None);
     }
 }

@@ -19,6 +19,8 @@
 //! `ply` header line, a JSON object) and else from the extension
 //! (case-insensitive `.obj`, `.ply`, `.smf`, `.gltf`, `.glb`).
 
+mod gltf_accessor;
+mod gltf_data;
 mod gltf_in;
 mod meshopt_in;
 mod obj;

@@ -7,7 +7,7 @@ use std::time::Instant;
 use lodgen_pm::metric::{ErrorReport, MeasureOptions};
 use lodgen_pm::{levels, simplify_adaptive, MeshError, Method, Simplified, SimplifyOptions};
 
-use crate::scene::{LodLevel, LodMesh, Scene, SourceMesh};
+use crate::scene::{LodLevel, LodMesh, Scene, SourceMesh, Warning};
 
 use super::error::BuildError;
 use super::extract::extract;
@@ -52,7 +52,8 @@ pub struct BuildTimes {
     pub total: std::time::Duration,
 }
 
-/// Build the LOD chain of every mesh of `scene`.
+/// Build the LOD chain of every mesh of `scene` (a mesh the reader left
+/// with no primitive has none); the first mesh that fails fails the call.
 pub fn build_lods(
     scene: &Scene,
     opts: &BuildOptions,
@@ -63,12 +64,76 @@ pub fn build_lods(
         .meshes
         .iter()
         .enumerate()
+        .filter(|(_, m)| !m.primitives.is_empty())
         .map(|(i, m)| {
             progress(Progress::Simplifying { mesh: i, of: n });
             build_one(i, m, opts, progress)
         })
         .collect()
 }
+
+/// The builds of a scene with per-mesh fault isolation.
+#[derive(Debug, Default)]
+pub struct SceneBuild {
+    /// The meshes that were simplified.
+    pub builds: Vec<MeshBuild>,
+    /// The meshes that could not be: one level, the input as it is.
+    pub unsimplified: Vec<LodMesh>,
+    /// Why each of `unsimplified` is there, naming the mesh.
+    pub warnings: Vec<Warning>,
+}
+
+impl SceneBuild {
+    /// Every chain to write, in source order.
+    pub fn lods(&self) -> Vec<LodMesh> {
+        let mut all: Vec<LodMesh> = self.builds.iter().map(|b| b.lod.clone()).collect();
+        all.extend(self.unsimplified.iter().cloned());
+        all.sort_by_key(|l| l.source);
+        all
+    }
+}
+
+/// [`build_lods`], but a mesh that cannot be simplified (every triangle
+/// degenerate, a simplification or measurement error) is kept unsimplified
+/// as a one-level chain with a warning naming it, instead of failing the
+/// scene. Errors that are not about one mesh (no levels requested) fail.
+pub fn build_lods_isolated(
+    scene: &Scene,
+    opts: &BuildOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<SceneBuild, BuildError> {
+    let n = scene.meshes.len();
+    let mut out = SceneBuild::default();
+    for (i, m) in scene.meshes.iter().enumerate() {
+        if m.primitives.is_empty() {
+            continue;
+        }
+        progress(Progress::Simplifying { mesh: i, of: n });
+        match build_one(i, m, opts, progress) {
+            Ok(b) => out.builds.push(b),
+            Err(BuildError::NoLevels) => return Err(BuildError::NoLevels),
+            Err(e) => {
+                out.warnings.push(Warning::new(
+                    format!("meshes[{i}] (mesh `{}`)", m.name),
+                    format!("written unsimplified, one level: {e}"),
+                ));
+                let coverage = crate::coverage::screen_coverages(&[0.0]);
+                out.unsimplified.push(LodMesh {
+                    source: i,
+                    name: m.name.clone(),
+                    levels: vec![LodLevel {
+                        primitives: m.primitives.clone(),
+                        hausdorff: 0.0,
+                        rms: 0.0,
+                        screen_coverage: coverage.first().copied().unwrap_or(0.0),
+                    }],
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Build the LOD chain of one mesh.
 pub fn build_one(
     index: usize,

@@ -1,6 +1,7 @@
 //! Extraction: a level of the progressive mesh turned back into the
 //! source's primitives, attributes transferred corner by corner from each
-//! corner's wedge, then the fitted values.
+//! corner's wedge (skin and morph targets from that source vertex as they
+//! are), then the fitted values.
 
 use std::collections::BTreeMap;
 
@@ -47,6 +48,7 @@ pub(super) fn extract(
             extra_colors: vec![Vec::new(); p.extra_colors.len()],
             extra_joints: vec![Vec::new(); p.extra_joints.len()],
             extra_weights: vec![Vec::new(); p.extra_weights.len()],
+            targets: p.targets.iter().map(|t| t.empty_like()).collect(),
             ..Primitive::default()
         })
         .collect();
@@ -131,5 +133,13 @@ fn push_attributes(to: &mut Primitive, from: &Primitive, v: usize) {
     }
     for w in to.extra_weights.iter_mut() {
         w.extend(sets.next());
+    }
+    // morph targets: the displacements of the same source vertex (part of
+    // the wedge key, so they follow the contractions like the skin)
+    for (i, t) in to.targets.iter_mut().enumerate() {
+        match from.targets.get(i) {
+            Some(f) => t.push_from(f, v),
+            None => t.push_from(&crate::scene::MorphTarget::default(), v),
+        }
     }
 }

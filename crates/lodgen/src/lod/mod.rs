@@ -47,7 +47,7 @@ mod stream;
 mod unit;
 mod wedges;
 
-pub use build::{build_lods, build_one, BuildTimes, MeshBuild};
+pub use build::{build_lods, build_lods_isolated, build_one, BuildTimes, MeshBuild, SceneBuild};
 pub use error::BuildError;
 pub use options::{AttributeWeights, BuildOptions, LevelRequest, Progress, DEFAULT_MIN_TRIANGLES};
 pub use stream::stream_attributes;

@@ -40,6 +40,13 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
     for a in &p.extra_weights {
         put(&a[v]);
     }
+    // morph displacements: a vertex whose targets move it differently from
+    // its neighbour at the same position is another wedge
+    for t in &p.targets {
+        for (_, d) in t.channels() {
+            put(&d[v]);
+        }
+    }
     if let Some(a) = &p.joints {
         k.extend(a[v].map(u32::from));
     }
