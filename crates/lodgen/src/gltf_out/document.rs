@@ -198,10 +198,9 @@ fn attach_chains(
         // Node extensions that point at mesh data (instancing accessors) or
         // at the input's own LOD chains no longer apply.
         if let Some(Value::Object(ext)) = node.get_mut("extensions") {
-            for k in ext
-                .keys()
-                .filter(|k| DROPPED_EXTENSIONS.contains(&k.as_str()))
-            {
+            // (the input's own MSFT_lod chains are replaced, not lost)
+            let lost = |k: &&String| DROPPED_EXTENSIONS.contains(&k.as_str()) && *k != "MSFT_lod";
+            for k in ext.keys().filter(lost) {
                 warnings.push(Warning::new(
                     format!("nodes[{i}]"),
                     format!("{k} dropped (it refers to the input's mesh data)"),
