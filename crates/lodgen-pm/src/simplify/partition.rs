@@ -275,6 +275,7 @@ impl Simplifier {
                 self.quadric[g] = s.quadric[i];
                 self.alive[g] = s.alive[i];
                 self.boundary[g] = s.boundary[i];
+                self.corner[g] = s.corner[i];
             }
         }
         let start = start as usize;
