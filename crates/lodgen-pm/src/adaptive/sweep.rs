@@ -11,7 +11,7 @@ use super::options::{
     REVERSED_MAX_COS,
 };
 use crate::mesh::Mesh;
-use crate::progressive::{Contraction, Corner, Log, ProgressiveMesh, Removed};
+use crate::progressive::{Log, ProgressiveMesh};
 use crate::simplify::legality::{link, moved_faces_ok, Faces, Link, Rejected};
 use crate::simplify::quadric::Quadric;
 use crate::simplify::stats::{PhaseTimes, Rejections, Stats};
@@ -111,20 +111,6 @@ impl Engine {
             },
             stats,
         }
-    }
-
-    fn reject(&mut self, r: Rejected) {
-        let c = &mut self.report.prevented;
-        *match r {
-            Rejected::Locked => &mut c.locked,
-            Rejected::Link => &mut c.link,
-            Rejected::BoundaryPinch => &mut c.boundary_pinch,
-            Rejected::Flip => &mut c.flip,
-            Rejected::Degenerate => &mut c.degenerate,
-            Rejected::Duplicate => &mut c.duplicate,
-            Rejected::Error => &mut c.error,
-            Rejected::Feature => &mut c.feature,
-        } += 1;
     }
 
     /// Algorithm 1, steps 2–4: classify, decimate, repeat.
@@ -284,7 +270,7 @@ impl Engine {
                 true
             }
             Err(r) => {
-                self.reject(r);
+                self.report.prevented.count(r);
                 false
             }
         }
@@ -323,19 +309,8 @@ impl Engine {
         let (i0, i1) = (v0 as usize, v1 as usize);
         let q = self.quadric[i0] + self.quadric[i1];
         let cost = q.eval(p);
-        let error = if q.weight > 0.0 {
-            (cost / q.weight).sqrt()
-        } else {
-            cost.sqrt()
-        };
-        let mut record = Contraction {
-            v0,
-            v1,
-            p1: self.pos[i1],
-            removed: Removed::new(&removed),
-            moved: self.log.mark()..self.log.mark(),
-            error: error as f32,
-        };
+        let error = q.distance(cost);
+        let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error as f32);
         for &t in &record.removed {
             self.tri_alive[t as usize] = false;
         }
@@ -345,13 +320,11 @@ impl Engine {
             if !self.tri_alive[t as usize] {
                 continue;
             }
-            let tri = &mut self.tris[t as usize];
-            if let Some(slot) = tri.iter().position(|&x| x == v0) {
-                tri[slot] = v1;
-                self.log.push_corner(Corner {
-                    triangle: t,
-                    slot: slot as u8,
-                });
+            if self
+                .log
+                .move_corner(&mut self.tris[t as usize], t, v0, v1)
+                .is_some()
+            {
                 self.vtris[i1].push(t);
             }
         }

@@ -191,6 +191,26 @@ impl Log {
         }
     }
 
+    /// The record of contracting `v0` into `v1` (at `p1` before it),
+    /// deleting `removed`, its moved corners to be pushed next.
+    pub fn begin(
+        &self,
+        v0: u32,
+        v1: u32,
+        p1: [f32; 3],
+        removed: &[u32],
+        error: f32,
+    ) -> Contraction {
+        Contraction {
+            v0,
+            v1,
+            p1,
+            removed: Removed::new(removed),
+            moved: self.mark()..self.mark(),
+            error,
+        }
+    }
+
     /// The next corner's index, for `Contraction::moved`.
     pub fn mark(&self) -> u32 {
         self.corners.len() as u32
@@ -198,6 +218,18 @@ impl Log {
 
     pub fn push_corner(&mut self, c: Corner) {
         self.corners.push(c.triangle << 2 | u32::from(c.slot));
+    }
+
+    /// Moves the corner of triangle `t` (`tri`) at `v0` to `v1` and logs it;
+    /// returns its slot, `None` when `tri` has no corner at `v0`.
+    pub fn move_corner(&mut self, tri: &mut [u32; 3], t: u32, v0: u32, v1: u32) -> Option<usize> {
+        let slot = tri.iter().position(|&x| x == v0)?;
+        tri[slot] = v1;
+        self.push_corner(Corner {
+            triangle: t,
+            slot: slot as u8,
+        });
+        Some(slot)
     }
 
     pub fn moved(&self, c: &Contraction) -> impl Iterator<Item = Corner> + '_ {

@@ -4,7 +4,6 @@
 
 use super::{fv, Plan, Simplifier};
 use crate::mesh::adjacency::FanLookup;
-use crate::progressive::{Contraction, Corner, Removed};
 use crate::simplify::features::WedgeEdits;
 use crate::simplify::Schedule;
 
@@ -31,14 +30,7 @@ impl Simplifier {
             );
             (e, f.wedges.is_some())
         });
-        let mut record = Contraction {
-            v0,
-            v1,
-            p1: self.pos[i1],
-            removed: Removed::new(&removed),
-            moved: self.log.mark()..self.log.mark(),
-            error,
-        };
+        let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error);
         for &t in &record.removed {
             self.tri_alive[t as usize] = false;
         }
@@ -88,13 +80,7 @@ impl Simplifier {
             if !self.tri_alive[t as usize] {
                 continue;
             }
-            let tri = &mut self.tris[t as usize];
-            if let Some(k) = tri.iter().position(|&x| x == v0) {
-                tri[k] = v1;
-                self.log.push_corner(Corner {
-                    triangle: t,
-                    slot: k as u8,
-                });
+            if let Some(k) = self.log.move_corner(&mut self.tris[t as usize], t, v0, v1) {
                 into.push(t);
                 if let (Some((edits, true)), Some(f)) = (&edits, &mut self.features) {
                     let e = edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1);

@@ -27,11 +27,7 @@ impl Simplifier {
         let (ai, bi) = (a as usize, b as usize);
         let q = self.quadric[ai] + self.quadric[bi];
         let (p, cost) = self.target_with(&q, a, b);
-        let error = if q.weight > 0.0 {
-            (cost / q.weight).sqrt()
-        } else {
-            cost.sqrt()
-        };
+        let error = q.distance(cost);
         if self.opts.max_error.is_some_and(|m| error > m) {
             return Err(Rejected::Error);
         }

@@ -56,6 +56,17 @@ impl Quadric {
         }
     }
 
+    /// A cost of this quadric (`eval`) as a distance: the root of the mean
+    /// squared distance over its planes' weight (of the sum without weight).
+    #[inline]
+    pub fn distance(&self, cost: f64) -> f64 {
+        if self.weight > 0.0 {
+            (cost / self.weight).sqrt()
+        } else {
+            cost.sqrt()
+        }
+    }
+
     /// `vᵀ Q v` with `v = (p, 1)`: the weighted sum of squared distances.
     #[inline]
     pub fn eval(&self, p: DVec3) -> f64 {

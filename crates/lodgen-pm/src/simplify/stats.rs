@@ -26,7 +26,7 @@ pub struct Rejections {
 }
 
 impl Rejections {
-    pub(super) fn count(&mut self, r: Rejected) {
+    pub(crate) fn count(&mut self, r: Rejected) {
         *match r {
             Rejected::Locked => &mut self.locked,
             Rejected::Link => &mut self.link,
