@@ -121,64 +121,10 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         };
         let has_normals = roles.iter().any(|r| matches!(r, Role::Normal(_)));
         let has_uv = roles.iter().any(|r| matches!(r, Role::Uv(_)));
-        let index_list = match element.name.as_str() {
-            "face" => Some(
-                element
-                    .props
-                    .iter()
-                    .position(|p| p.name == "vertex_indices" || p.name == "vertex_index")
-                    .filter(|&i| matches!(element.props[i].kind, Kind::List { .. }))
-                    .ok_or_else(|| {
-                        invalid(
-                            path,
-                            Location::File,
-                            "`face` element has no `vertex_indices` list",
-                        )
-                    })?,
-            ),
-            "tristrips" => element
-                .props
-                .iter()
-                .position(|p| p.name == "vertex_indices" && matches!(p.kind, Kind::List { .. })),
-            _ => None,
-        };
+        let index_list = index_list_of(element, path)?;
         for index in 0..element.count {
             body.begin(&element.name, index)?;
-            let mut p = [0.0f64; 3];
-            let mut n = [0.0f64; 3];
-            let mut uv = [0.0f64; 2];
-            for (pi, prop) in element.props.iter().enumerate() {
-                match prop.kind {
-                    Kind::Scalar(ty) => {
-                        let value = body.scalar(ty, &element.name, index)?;
-                        match roles[pi] {
-                            Role::Skip => {}
-                            Role::Position(k) => p[k] = value,
-                            Role::Normal(k) => n[k] = value,
-                            Role::Uv(k) => uv[k] = value,
-                        }
-                    }
-                    Kind::List { count, item } => {
-                        let len = body.scalar(count, &element.name, index)?;
-                        if !(len >= 0.0 && len.fract() == 0.0) {
-                            return Err(body.error(
-                                &element.name,
-                                index,
-                                ErrorKind::Invalid(format!("list length {len} of `{}`", prop.name)),
-                            ));
-                        }
-                        let len = len as usize;
-                        if Some(pi) == index_list {
-                            list.clear();
-                            for _ in 0..len {
-                                list.push(body.scalar(item, &element.name, index)?);
-                            }
-                        } else {
-                            body.skip(item, len, &element.name, index)?;
-                        }
-                    }
-                }
-            }
+            let (p, n, uv) = read_record(&mut body, element, index, &roles, index_list, &mut list)?;
             body.end(&element.name, index)?;
             if element.name == "vertex" {
                 positions.push(finite3(p, &body, index, "vertex coordinate")?);
@@ -190,56 +136,8 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
                     texcoords.push([t[0], 1.0 - t[1]]);
                 }
             } else if index_list.is_some() {
-                resolved.clear();
-                for &raw in &list {
-                    if raw == -1.0 && element.name == "tristrips" {
-                        resolved.push(u32::MAX);
-                        continue;
-                    }
-                    if !(raw >= 0.0 && raw.fract() == 0.0 && (raw as usize) < vertex_count) {
-                        return Err(body.error(
-                            &element.name,
-                            index,
-                            ErrorKind::IndexOutOfRange {
-                                what: if element.name == "face" {
-                                    "face"
-                                } else {
-                                    "strip"
-                                },
-                                target: "vertex",
-                                index: raw as i64,
-                                count: vertex_count,
-                            },
-                        ));
-                    }
-                    resolved.push(raw as u32);
-                }
-                if element.name == "face" {
-                    if resolved.len() < 3 {
-                        return Err(body.error(
-                            &element.name,
-                            index,
-                            ErrorKind::Invalid(format!(
-                                "face has {} corners, needs at least 3",
-                                resolved.len()
-                            )),
-                        ));
-                    }
-                    for i in 1..resolved.len() - 1 {
-                        indices.extend_from_slice(&[resolved[0], resolved[i], resolved[i + 1]]);
-                    }
-                } else {
-                    for strip in resolved.split(|&i| i == u32::MAX) {
-                        for i in 0..strip.len().saturating_sub(2) {
-                            let (b, c) = if i % 2 == 0 {
-                                (i + 1, i + 2)
-                            } else {
-                                (i + 2, i + 1)
-                            };
-                            indices.extend_from_slice(&[strip[i], strip[b], strip[c]]);
-                        }
-                    }
-                }
+                let at = (&body, element, index);
+                add_indices(at, &list, vertex_count, &mut resolved, &mut indices)?;
             }
         }
     }
@@ -263,6 +161,141 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
     };
     check_not_empty(&scene, path)?;
     Ok(scene)
+}
+
+/// Which property of `element` lists its vertex indices (`face`: required;
+/// `tristrips`: if any; other elements: none).
+fn index_list_of(element: &Element, path: &Path) -> Result<Option<usize>, ReadError> {
+    let list = |name_ok: &dyn Fn(&str) -> bool| {
+        element
+            .props
+            .iter()
+            .position(|p| name_ok(&p.name) && matches!(p.kind, Kind::List { .. }))
+    };
+    Ok(match element.name.as_str() {
+        "face" => Some(
+            list(&|n| n == "vertex_indices" || n == "vertex_index").ok_or_else(|| {
+                invalid(
+                    path,
+                    Location::File,
+                    "`face` element has no `vertex_indices` list",
+                )
+            })?,
+        ),
+        "tristrips" => list(&|n| n == "vertex_indices"),
+        _ => None,
+    })
+}
+
+/// A vertex record's position, normal and texture coordinate.
+type Record = ([f64; 3], [f64; 3], [f64; 2]);
+
+/// One record of `element`: its position, normal and texture coordinate
+/// (as `roles` assign them; zeros otherwise), and the index list (property
+/// `index_list`) into `list`.
+fn read_record(
+    body: &mut Body<'_>,
+    element: &Element,
+    index: usize,
+    roles: &[Role],
+    index_list: Option<usize>,
+    list: &mut Vec<f64>,
+) -> Result<Record, ReadError> {
+    let mut p = [0.0f64; 3];
+    let mut n = [0.0f64; 3];
+    let mut uv = [0.0f64; 2];
+    for (pi, prop) in element.props.iter().enumerate() {
+        match prop.kind {
+            Kind::Scalar(ty) => {
+                let value = body.scalar(ty, &element.name, index)?;
+                match roles[pi] {
+                    Role::Skip => {}
+                    Role::Position(k) => p[k] = value,
+                    Role::Normal(k) => n[k] = value,
+                    Role::Uv(k) => uv[k] = value,
+                }
+            }
+            Kind::List { count, item } => {
+                let len = body.scalar(count, &element.name, index)?;
+                if !(len >= 0.0 && len.fract() == 0.0) {
+                    return Err(body.error(
+                        &element.name,
+                        index,
+                        ErrorKind::Invalid(format!("list length {len} of `{}`", prop.name)),
+                    ));
+                }
+                let len = len as usize;
+                if Some(pi) == index_list {
+                    list.clear();
+                    for _ in 0..len {
+                        list.push(body.scalar(item, &element.name, index)?);
+                    }
+                } else {
+                    body.skip(item, len, &element.name, index)?;
+                }
+            }
+        }
+    }
+    Ok((p, n, uv))
+}
+
+/// Checks the index list of record `index` of a `face` (fanned) or
+/// `tristrips` (strips split at -1) element and appends its triangles.
+fn add_indices(
+    (body, element, index): (&Body<'_>, &Element, usize),
+    list: &[f64],
+    vertex_count: usize,
+    resolved: &mut Vec<u32>,
+    indices: &mut Vec<u32>,
+) -> Result<(), ReadError> {
+    let face = element.name == "face";
+    resolved.clear();
+    for &raw in list {
+        if raw == -1.0 && !face {
+            resolved.push(u32::MAX);
+            continue;
+        }
+        if !(raw >= 0.0 && raw.fract() == 0.0 && (raw as usize) < vertex_count) {
+            return Err(body.error(
+                &element.name,
+                index,
+                ErrorKind::IndexOutOfRange {
+                    what: if face { "face" } else { "strip" },
+                    target: "vertex",
+                    index: raw as i64,
+                    count: vertex_count,
+                },
+            ));
+        }
+        resolved.push(raw as u32);
+    }
+    if face {
+        if resolved.len() < 3 {
+            return Err(body.error(
+                &element.name,
+                index,
+                ErrorKind::Invalid(format!(
+                    "face has {} corners, needs at least 3",
+                    resolved.len()
+                )),
+            ));
+        }
+        for i in 1..resolved.len() - 1 {
+            indices.extend_from_slice(&[resolved[0], resolved[i], resolved[i + 1]]);
+        }
+    } else {
+        for strip in resolved.split(|&i| i == u32::MAX) {
+            for i in 0..strip.len().saturating_sub(2) {
+                let (b, c) = if i % 2 == 0 {
+                    (i + 1, i + 2)
+                } else {
+                    (i + 2, i + 1)
+                };
+                indices.extend_from_slice(&[strip[i], strip[b], strip[c]]);
+            }
+        }
+    }
+    Ok(())
 }
 
 fn invalid(path: &Path, location: Location, message: &str) -> ReadError {
