@@ -68,6 +68,18 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         .filter(|e| !HANDLED_EXTENSIONS.contains(&e.as_str()))
         .cloned()
         .collect();
+    // the gltf crate's validation indexes POSITION accessors unchecked
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim.attributes.get(&Checked::Valid(Semantic::Positions));
+            if let Some(a) = position.filter(|a| a.value() >= root.accessors.len()) {
+                return Err(r.json_err(
+                    &format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
+                    format!("accessor {} does not exist", a.value()),
+                ));
+            }
+        }
+    }
     let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => match errors.first() {
             Some((json_path, error)) => r.err(
