@@ -76,6 +76,17 @@ pub fn inspect(path: &Path) -> Result<InspectReport, InspectError> {
         source,
     })?;
     let json: Value = if bytes.starts_with(b"glTF") {
+        // the gltf crate subtracts the header size from the declared length
+        // unchecked (a panic below 12)
+        let declared = bytes
+            .get(8..12)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if declared.is_none_or(|l| l < 12) {
+            return Err(InspectError::Glb {
+                path: path.to_path_buf(),
+                reason: "GLB header: length missing or below 12 bytes".into(),
+            });
+        }
         let glb = gltf::Glb::from_slice(&bytes).map_err(|e| InspectError::Glb {
             path: path.to_path_buf(),
             reason: e.to_string(),
