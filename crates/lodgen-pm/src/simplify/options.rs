@@ -98,7 +98,10 @@ pub struct SimplifyOptions {
     /// (no τ pairs, feature edges, wedges or attributes) to at most 10 %
     /// of the input, on meshes of at least eight clusters; the result depends on this value, never on the
     /// thread count. `None`: the whole-mesh walk throughout. Default
-    /// value: `Some(DEFAULT_CLUSTER_TRIANGLES)`.
+    /// value: `None` (opt in with `Some(DEFAULT_CLUSTER_TRIANGLES)`): on the
+    /// 2-core bench machine it was no faster than the whole-mesh walk, whose
+    /// planning already runs on every core, and took ~100 more bytes per
+    /// triangle at peak.
     pub partition: Option<usize>,
 }
 
@@ -115,7 +118,7 @@ impl SimplifyOptions {
         schedule: Schedule::Passes {
             factor: DEFAULT_PASS_FACTOR,
         },
-        partition: Some(DEFAULT_CLUSTER_TRIANGLES),
+        partition: None,
     };
     /// Stop at `n` triangles.
     pub fn with_target_triangles(mut self, n: usize) -> Self {
