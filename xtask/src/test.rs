@@ -1,5 +1,7 @@
 //! `cargo xtask test [CARGO-TEST-ARGS]`: the project's single "run all tests" command.
 //!
+//! 0. `cargo xtask layout`'s rules (file and function lengths, module
+//!    cycles), in-process.
 //! 1. `cargo test --workspace` with `LODGEN_TEST_OUT=<root>/target/test-out`
 //!    (emptied first); Rust tests write every glTF they produce there.
 //! 2. `cargo xtask fuzz --cases 3000 --seed 1` in-process (mutated input
@@ -249,6 +251,30 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
         fs::remove_dir_all(&out).with_context(|| format!("emptying {}", out.display()))?;
     }
     fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+
+    // 0. The layout rules (files ≤ 800 lines, functions ≤ 120, no module
+    // cycles; `cargo xtask layout` lists the problems).
+    let t_layout = Instant::now();
+    match crate::layout::check_workspace(&root) {
+        Ok(problems) if problems.is_empty() => steps.record(
+            "layout",
+            Outcome::Passed,
+            t_layout.elapsed().as_secs_f64(),
+            "",
+        ),
+        Ok(problems) => steps.record(
+            "layout",
+            Outcome::Failed,
+            t_layout.elapsed().as_secs_f64(),
+            &problems.join("; "),
+        ),
+        Err(e) => steps.record(
+            "layout",
+            Outcome::Failed,
+            t_layout.elapsed().as_secs_f64(),
+            &format!("{e:#}"),
+        ),
+    }
 
     // 1. Rust tests.
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));

@@ -307,27 +307,8 @@ fn classify_vertex(
                 }
                 if boundary_weight > 0.0 {
                     let t = mesh.triangles[ts[s as usize] as usize];
-                    let (pa, pb) = (
-                        dv(mesh.positions[v as usize]),
-                        dv(mesh.positions[x as usize]),
-                    );
-                    let e = pb - pa;
-                    let c = e.cross(face_normal(&mesh.positions, &t));
-                    let len = c.length();
-                    if len > 0.0 {
-                        let c = c / len;
-                        let w = boundary_weight
-                            * if opts.area_weighted {
-                                e.length_squared()
-                            } else {
-                                1.0
-                            };
-                        // constraint planes shape the cost, not the
-                        // mean-distance normalisation
-                        quadric += Quadric {
-                            weight: 0.0,
-                            ..Quadric::from_plane(c, -c.dot(pa), w)
-                        };
+                    if let Some(q) = border_plane(mesh, &t, v, x, opts, boundary_weight) {
+                        quadric += q;
                     }
                 }
             }
@@ -352,6 +333,41 @@ fn classify_vertex(
         corner: boundary && !straight,
         locked,
     }
+}
+
+/// The constraint plane of the border edge `(v, x)` of triangle `t`: through
+/// the edge, perpendicular to the face, weighted by `boundary_weight` (times
+/// the edge's squared length when area-weighted); `None` for a degenerate
+/// face. It shapes the cost, not the mean-distance normalisation (weight 0).
+fn border_plane(
+    mesh: &Mesh,
+    t: &[u32; 3],
+    v: u32,
+    x: u32,
+    opts: &SimplifyOptions,
+    boundary_weight: f64,
+) -> Option<Quadric> {
+    let (pa, pb) = (
+        dv(mesh.positions[v as usize]),
+        dv(mesh.positions[x as usize]),
+    );
+    let e = pb - pa;
+    let c = e.cross(face_normal(&mesh.positions, t));
+    let len = c.length();
+    if len <= 0.0 {
+        return None;
+    }
+    let c = c / len;
+    let w = boundary_weight
+        * if opts.area_weighted {
+            e.length_squared()
+        } else {
+            1.0
+        };
+    Some(Quadric {
+        weight: 0.0,
+        ..Quadric::from_plane(c, -c.dot(pa), w)
+    })
 }
 
 /// A border vertex whose two border edges turn by more than

@@ -6,9 +6,9 @@ use gltf::json::accessor::{GenericComponentType, IndexComponentType, Type};
 use gltf::json::validation::Checked;
 use gltf::json::Root;
 
+use super::error::{ErrorKind, Location, ReadError};
 use super::gltf_data::{component_size, read_element};
 use super::gltf_in::Reader;
-use super::{ErrorKind, Location, ReadError};
 
 impl Reader<'_> {
     pub(super) fn same_count<T>(
@@ -105,7 +105,7 @@ impl Reader<'_> {
             return Err(bad(format!(
                 "{count} elements would pass the reader's memory cap ({} bytes per byte of \
                  input, {} bytes left)",
-                super::DECODED_BYTES_PER_INPUT_BYTE,
+                super::common::DECODED_BYTES_PER_INPUT_BYTE,
                 self.budget.get()
             )));
         }

@@ -24,8 +24,9 @@ use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::Checked;
 use gltf::json::Root;
 
+use super::common::{check_not_empty, ReadOptions};
+use super::error::{ErrorKind, Location, ReadError};
 use super::gltf_data::{decode_base64, fan_to_list, percent_decode, strip_to_list};
-use super::{check_not_empty, ErrorKind, Location, ReadError, ReadOptions};
 use crate::scene::{Material, MorphTarget, Origin, Primitive, Scene, SourceMesh, Warning};
 
 /// Required extensions this reader supports although the `gltf` crate's
@@ -121,8 +122,8 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     let mut buffers = r.load_buffers(&root, blob, &fallback)?;
     // the memory cap: decoded data per byte of input (file and buffers)
     let input = src.len() as u64 + buffers.iter().map(|b| b.len() as u64).sum::<u64>();
-    let mut budget = super::DECODED_BYTES_FLOOR
-        .saturating_add(input.saturating_mul(super::DECODED_BYTES_PER_INPUT_BYTE));
+    let mut budget = super::common::DECODED_BYTES_FLOOR
+        .saturating_add(input.saturating_mul(super::common::DECODED_BYTES_PER_INPUT_BYTE));
     if let Some(raw) = &raw {
         super::meshopt_in::decompress(raw, &mut root, &mut buffers, &mut budget)
             .map_err(|(at, message)| r.json_err(&at, message))?;
@@ -165,7 +166,7 @@ pub(super) struct Reader<'a> {
     /// A primitive or mesh that cannot be read is an error, not a warning.
     strict: bool,
     /// Bytes the reader may still allocate for decoded accessors (the
-    /// memory cap, [`super::DECODED_BYTES_PER_INPUT_BYTE`]).
+    /// memory cap, [`super::common::DECODED_BYTES_PER_INPUT_BYTE`]).
     pub(super) budget: std::cell::Cell<u64>,
 }
 

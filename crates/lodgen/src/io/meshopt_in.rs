@@ -38,7 +38,7 @@ pub fn fallback_buffers(raw: &Value) -> Vec<usize> {
 /// Decode every compressed view of `raw` (the document's JSON) into a new
 /// buffer appended to `buffers`, and point `root`'s view at it. Each
 /// decoded size is taken from `budget` (bytes the reader may still
-/// allocate, see [`super::DECODED_BYTES_PER_INPUT_BYTE`]) before it is
+/// allocate, see [`super::common::DECODED_BYTES_PER_INPUT_BYTE`]) before it is
 /// allocated. Errors are `(JSON path, message)`.
 pub fn decompress(
     raw: &Value,

@@ -31,9 +31,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::{
-    check_not_empty, file_stem, lines, parse_coords, parse_f32, ErrorKind, Location, ReadError,
-};
+use super::common::{check_not_empty, file_stem, lines, parse_coords, parse_f32};
+use super::error::{ErrorKind, Location, ReadError};
 use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
 
 const NONE: u32 = u32::MAX;

@@ -16,7 +16,8 @@
 
 use std::path::Path;
 
-use super::{check_not_empty, compact, file_stem, ErrorKind, Location, ReadError};
+use super::common::{check_not_empty, compact, file_stem};
+use super::error::{ErrorKind, Location, ReadError};
 use crate::scene::{Origin, Primitive, Scene, SourceMesh};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -11,9 +11,8 @@
 
 use std::path::Path;
 
-use super::{
-    check_not_empty, compact, file_stem, lines, parse_coords, ErrorKind, Location, ReadError,
-};
+use super::common::{check_not_empty, compact, file_stem, lines, parse_coords};
+use super::error::{ErrorKind, Location, ReadError};
 use crate::scene::{Origin, Primitive, Scene, SourceMesh};
 
 /// Reads an SMF file from its bytes; `path` names it in errors.

@@ -1,0 +1,162 @@
+//! What every reader shares: the memory cap, the read options, text
+//! tokenizing with located errors, and the clean-up of a read primitive.
+
+use std::path::Path;
+
+use super::error::{ErrorKind, Location, ReadError};
+use crate::scene::{Primitive, Scene};
+
+/// The memory cap of the readers: decoded data allocated from counts a
+/// file declares (glTF accessors, `EXT_meshopt_compression` views) may take
+/// at most this many bytes per byte of input (the file and its buffers),
+/// plus [`DECODED_BYTES_FLOOR`]. Every count is checked against the bytes
+/// that hold its data and against this cap *before* anything is allocated,
+/// so a lying count fails at once with an error naming it. The PLY reader
+/// sizes its arrays by the file's length. OBJ and SMF declare no counts:
+/// their arrays grow with the lines read, at most 14 bytes per input byte
+/// (a huge polygon's fan) plus one [`Primitive`] and a few hundred bytes
+/// per OBJ object (`tests/read_limits_text.rs` checks the worst cases).
+pub const DECODED_BYTES_PER_INPUT_BYTE: u64 = 64;
+
+/// The part of the memory cap every file gets whatever its size (64 MiB).
+pub const DECODED_BYTES_FLOOR: u64 = 64 << 20;
+
+/// How to read.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// A part of the file that would be left out with a warning (a glTF
+    /// primitive that cannot be read, points and lines, a mesh with no
+    /// triangle) is an error instead (`--strict`).
+    pub strict: bool,
+}
+
+/// Name of a mesh read from a single-mesh file: the file stem.
+pub(super) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mesh".to_owned())
+}
+
+/// Parses one number token of a text format.
+pub(super) fn parse_f32(
+    token: &str,
+    path: &Path,
+    line: usize,
+    what: &str,
+) -> Result<f32, ReadError> {
+    let value: f32 = token.parse().map_err(|_| {
+        ReadError::new(
+            path,
+            Location::Line(line),
+            ErrorKind::Syntax {
+                expected: format!("a number for {what}"),
+                found: token.to_owned(),
+            },
+        )
+    })?;
+    if !value.is_finite() {
+        return Err(ReadError::new(
+            path,
+            Location::Line(line),
+            ErrorKind::NonFinite {
+                what: what.to_owned(),
+                value,
+            },
+        ));
+    }
+    Ok(value)
+}
+
+/// Parses the next `N` coordinates of a text line; missing ones are a
+/// syntax error, extra ones are ignored by the caller.
+pub(super) fn parse_coords<'a, const N: usize>(
+    tokens: &mut impl Iterator<Item = &'a str>,
+    path: &Path,
+    line: usize,
+    what: &str,
+) -> Result<[f32; N], ReadError> {
+    let mut out = [0.0f32; N];
+    for slot in &mut out {
+        let token = tokens.next().ok_or_else(|| {
+            ReadError::new(
+                path,
+                Location::Line(line),
+                ErrorKind::Syntax {
+                    expected: format!("{N} coordinates for {what}"),
+                    found: "end of line".to_owned(),
+                },
+            )
+        })?;
+        *slot = parse_f32(token, path, line, what)?;
+    }
+    Ok(out)
+}
+
+/// Fails with [`ErrorKind::EmptyMesh`] when no mesh has a triangle.
+pub(super) fn check_not_empty(scene: &Scene, path: &Path) -> Result<(), ReadError> {
+    let triangles: usize = scene
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .map(|p| p.triangle_count())
+        .sum();
+    if triangles == 0 {
+        return Err(ReadError::new(path, Location::File, ErrorKind::EmptyMesh));
+    }
+    Ok(())
+}
+
+/// Splits text into `(1-based line number, line without "\r\n")`.
+pub(super) fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
+}
+
+/// Drops vertices no triangle refers to and renumbers the rest in order of
+/// first use. Every index must already be `< positions.len()`.
+pub(super) fn compact(p: Primitive) -> Primitive {
+    const UNSEEN: u32 = u32::MAX;
+    let mut remap = vec![UNSEEN; p.positions.len()];
+    let mut order: Vec<u32> = Vec::new();
+    let indices = p
+        .indices
+        .iter()
+        .map(|&i| {
+            debug_assert!((i as usize) < remap.len());
+            let r = &mut remap[i as usize];
+            if *r == UNSEEN {
+                *r = order.len() as u32;
+                order.push(i);
+            }
+            *r
+        })
+        .collect();
+    fn pick<T: Copy>(values: &[T], order: &[u32]) -> Vec<T> {
+        order.iter().map(|&i| values[i as usize]).collect()
+    }
+    Primitive {
+        material: p.material,
+        positions: pick(&p.positions, &order),
+        normals: p.normals.as_deref().map(|n| pick(n, &order)),
+        texcoords: p.texcoords.as_deref().map(|t| pick(t, &order)),
+        tangents: p.tangents.as_deref().map(|t| pick(t, &order)),
+        extra_texcoords: p.extra_texcoords.iter().map(|t| pick(t, &order)).collect(),
+        colors: p.colors.as_deref().map(|c| pick(c, &order)),
+        joints: p.joints.as_deref().map(|j| pick(j, &order)),
+        weights: p.weights.as_deref().map(|w| pick(w, &order)),
+        extra_colors: p.extra_colors.iter().map(|c| pick(c, &order)).collect(),
+        extra_joints: p.extra_joints.iter().map(|j| pick(j, &order)).collect(),
+        extra_weights: p.extra_weights.iter().map(|w| pick(w, &order)).collect(),
+        targets: p
+            .targets
+            .iter()
+            .map(|t| crate::scene::MorphTarget {
+                positions: t.positions.as_deref().map(|v| pick(v, &order)),
+                normals: t.normals.as_deref().map(|v| pick(v, &order)),
+                tangents: t.tangents.as_deref().map(|v| pick(v, &order)),
+            })
+            .collect(),
+        indices,
+    }
+}
