@@ -40,6 +40,14 @@ struct Level {
     notes: Vec<String>,
 }
 
+/// Whether no triangle of `level` has three distinct corner positions.
+fn all_degenerate(level: &Level) -> bool {
+    level.triangles.iter().all(|t| {
+        let [a, b, c] = t.map(|i| level.positions.get(i as usize).map(|p| p.map(f32::to_bits)));
+        a == b || b == c || a == c
+    })
+}
+
 /// Every mesh of a GLB, read with the `gltf` crate.
 fn read_levels(glb: &Path) -> Result<Result<Vec<Level>, String>> {
     let bytes = fs::read(glb).with_context(|| format!("reading {}", glb.display()))?;
@@ -238,6 +246,17 @@ pub fn run(args: &[String]) -> Result<()> {
             if level.triangles.is_empty() {
                 println!(
                     "{rel} mesh {i} '{}': skipped: no triangles to encode",
+                    level.name
+                );
+                skipped += 1;
+                continue;
+            }
+            if all_degenerate(level) {
+                // lodgen writes such a mesh unsimplified with a warning (per-mesh
+                // fault isolation); draco_encoder refuses it ("All triangles
+                // are degenerate"), so there is nothing to round-trip
+                println!(
+                    "{rel} mesh {i} '{}': skipped: every triangle is degenerate",
                     level.name
                 );
                 skipped += 1;
