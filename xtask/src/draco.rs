@@ -243,22 +243,15 @@ pub fn run(args: &[String]) -> Result<()> {
             for note in &level.notes {
                 println!("{rel} mesh {i} '{}': {note}", level.name);
             }
-            if level.triangles.is_empty() {
-                println!(
-                    "{rel} mesh {i} '{}': skipped: no triangles to encode",
-                    level.name
-                );
-                skipped += 1;
-                continue;
-            }
-            if all_degenerate(level) {
-                // lodgen writes such a mesh unsimplified with a warning (per-mesh
-                // fault isolation); draco_encoder refuses it ("All triangles
-                // are degenerate"), so there is nothing to round-trip
-                println!(
-                    "{rel} mesh {i} '{}': skipped: every triangle is degenerate",
-                    level.name
-                );
+            // a mesh lodgen wrote unsimplified because every triangle is
+            // degenerate is refused by draco_encoder: nothing to round-trip
+            let skip = if level.triangles.is_empty() {
+                Some("no triangles to encode")
+            } else {
+                all_degenerate(level).then_some("every triangle is degenerate")
+            };
+            if let Some(why) = skip {
+                println!("{rel} mesh {i} '{}': skipped: {why}", level.name);
                 skipped += 1;
                 continue;
             }
