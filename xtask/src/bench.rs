@@ -219,6 +219,9 @@ fn run_child(exe: &std::path::Path, tool: &str, mesh: &str, runs: usize) -> Resu
 }
 
 pub fn run(args: &[String]) -> Result<()> {
+    if args.iter().any(|a| a == "--python") {
+        return crate::py_bench::run_python(args);
+    }
     if crate::rerun_in_release("bench", args)? {
         return Ok(());
     }

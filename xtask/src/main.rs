@@ -10,6 +10,7 @@ mod e2e;
 mod fuzz;
 mod golden;
 mod layout;
+mod py_bench;
 mod quality;
 mod render;
 mod stream_bench;
@@ -26,6 +27,10 @@ tasks:
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
   bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
                           then end to end (the lodgen binary vs a meshopt program; + 4.4M)
+  bench --python [--batch] [--quick]
+                          lodgen.simplify from Python vs the same call in Rust, pyfqmr, fast-simplification
+                          (bunny to 2 %, venv target/bench-venv or $LODGEN_PYTHON); --batch: --jobs 2 / --jobs 1
+                          on 200 generated meshes and the re-run with nothing changed
   stream-bench [--quick] [--runs N]
                           time to first pixel / full detail, progressive vs plain meshopt file, three.js in
                           headless Chromium over a throttled 10 Mbit/s, 50 ms line (bunny, 1.1M bunny)

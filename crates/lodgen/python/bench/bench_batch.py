@@ -7,7 +7,9 @@ as binary PLY), `lodgen DIR --out-dir OUT --jobs 2` against `--jobs 1`
 """
 
 import argparse
+import os
 import pathlib
+import resource
 import statistics
 import subprocess
 import sys
@@ -47,6 +49,11 @@ def write_ply(path: pathlib.Path, v, f) -> None:
         out.write(rec.tobytes())
 
 
+def children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def main() -> int:
     p = argparse.ArgumentParser()
     p.add_argument("--count", type=int, default=200)
@@ -66,20 +73,29 @@ def main() -> int:
     total = sum(int(t) for t in sizes)
     print(f"{a.count} meshes, about {total} triangles in all ({sizes.min()}-{sizes.max()} each)")
     times = {1: [], 2: []}
+    cpu = {1: [], 2: []}
+    loads = [os.getloadavg()[0]]
     for _ in range(a.rounds):
         for jobs in (1, 2):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), children_cpu()
             subprocess.run([a.lodgen, str(src), "--out-dir", str(base / "out"), "--jobs", str(jobs),
                             "--force", "-q"], check=True)
             times[jobs].append(time.perf_counter() - t0)
+            cpu[jobs].append(children_cpu() - c0)
+            loads.append(os.getloadavg()[0])
     t0 = time.perf_counter()
     out = subprocess.run([a.lodgen, str(src), "--out-dir", str(base / "out"), "--jobs", "2"],
                          check=True, capture_output=True, text=True)
     rerun = time.perf_counter() - t0
     assert f"0 built, {a.count} unchanged" in out.stdout, out.stdout[-300:]
     j1, j2 = statistics.median(times[1]), statistics.median(times[2])
-    print(f"--jobs 1: {j1:.2f} s  (runs {', '.join(f'{t:.2f}' for t in times[1])})")
-    print(f"--jobs 2: {j2:.2f} s  (runs {', '.join(f'{t:.2f}' for t in times[2])})  = {j2 / j1:.2f}x --jobs 1")
+    for jobs in (1, 2):
+        runs = ", ".join(f"{t:.2f}" for t in times[jobs])
+        cpus = ", ".join(f"{t:.2f}" for t in cpu[jobs])
+        print(f"--jobs {jobs}: {statistics.median(times[jobs]):.2f} s wall (runs {runs}; CPU {cpus} s)")
+    pairs = [b / a for a, b in zip(times[1], times[2])]
+    print(f"--jobs 2 / --jobs 1: {j2 / j1:.2f}x (medians); run by run {', '.join(f'{r:.2f}' for r in pairs)}")
+    print(f"load average (1 min) during the runs: {min(loads):.2f}-{max(loads):.2f} on {os.cpu_count()} cores")
     print(f"re-run with nothing changed: {rerun:.3f} s")
     return 0
 
