@@ -3,15 +3,13 @@
 //! a re-run that skips everything, `--force`, changed inputs and options,
 //! globs, and bytes equal to single-file runs.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn lodgen(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodgen"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the lodgen binary runs")
+    support::lodgen_in(args, cwd)
 }
 
 fn obj_text(m: &lodgen_pm::Mesh) -> String {

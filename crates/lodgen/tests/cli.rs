@@ -3,15 +3,12 @@
 //! (when set) for the glTF-Validator and Babylon.js checks of `cargo xtask
 //! test`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
-fn lodgen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodgen"))
-        .args(args)
-        .output()
-        .expect("the lodgen binary runs")
-}
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use support::{lodgen, stderr, stdout};
 
 fn tmp(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -22,22 +19,10 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 /// Copy outputs for the validator / Babylon checks.
 fn publish(files: &[&Path]) {
-    if let Some(dir) = std::env::var_os("LODGEN_TEST_OUT") {
-        let dir = PathBuf::from(dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        for f in files {
-            std::fs::copy(f, dir.join(f.file_name().unwrap())).unwrap();
-        }
+    for f in files {
+        support::publish(f, f.file_name().unwrap().to_str().unwrap());
     }
 }
 

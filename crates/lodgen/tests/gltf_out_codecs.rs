@@ -2,13 +2,12 @@
 //! (EXT_meshopt_compression): decoded data must equal the plain output's
 //! within quantization error, vertex streams must use codec version 0.
 
-#[path = "gltf_out_common/mod.rs"]
-mod common;
+mod support;
 
-use common::*;
 use lodgen::gltf_out::{write_lods, Compression, WriteOptions};
 use lodgen::scene::{Material, Origin, Primitive, Scene, SourceMesh};
 use serde_json::Value;
+use support::written::*;
 
 fn textured_scene() -> (Scene, lodgen::scene::LodMesh) {
     let center = [10.0, 0.0, -4.0];
@@ -77,7 +76,7 @@ fn write(name: &str, opts: WriteOptions) -> (Value, Vec<Vec<u8>>, lodgen::gltf_o
         "ball.glb"
     };
     let summary = write_lods(&dir.join(file), &scene, &[lod], &opts).unwrap();
-    publish(name, &summary);
+    publish_summary(name, &summary);
     let (json, buffers) = load_raw(&dir.join(file));
     (json, buffers, summary)
 }
@@ -330,7 +329,7 @@ fn quantized_attributes_use_compact_formats() {
             compression,
         };
         let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
-        publish("q-attributes", &summary);
+        publish_summary("q-attributes", &summary);
         let (json, _) = load_raw(&path);
         let prim = &json["meshes"][0]["primitives"][0]["attributes"];
         let format = |a: &str| {

@@ -2,15 +2,14 @@
 //! positions, MSFT_lod structure, buffers per level, glTF-origin scenes,
 //! determinism, atomic failure and `inspect`.
 
-#[path = "gltf_out_common/mod.rs"]
-mod common;
+mod support;
 
 use std::path::Path;
 
-use common::*;
 use lodgen::gltf_out::{write_lods, Compression, LevelProblem, WriteError, WriteOptions};
 use lodgen::scene::{LodLevel, LodMesh, Material, Origin, Primitive, Scene, SourceMesh};
 use serde_json::Value;
+use support::written::*;
 
 fn sphere_scene(n: u32) -> (Scene, Primitive) {
     let (positions, indices) = icosphere(n, 2.0, [1.0, -3.0, 0.5]);
@@ -134,7 +133,7 @@ fn glb_round_trips_every_level() {
         &WriteOptions::default(),
     )
     .unwrap();
-    publish("glb_round_trip", &summary);
+    publish_summary("glb_round_trip", &summary);
     check_round_trip(&path, &lod);
     assert_eq!(summary.meshes[0].level_bytes.len(), 3);
     assert!(summary.meshes[0]
@@ -205,7 +204,7 @@ fn gltf_writes_one_bin_per_level() {
         &WriteOptions::default(),
     )
     .unwrap();
-    publish("gltf_per_level_bins", &summary);
+    publish_summary("gltf_per_level_bins", &summary);
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
@@ -294,7 +293,7 @@ fn several_meshes_u16_and_u32_indices() {
         &WriteOptions::default(),
     )
     .unwrap();
-    publish("multi", &summary);
+    publish_summary("multi", &summary);
     let (json, _) = load_raw(&path);
     let itype = |mesh: usize| {
         let a = json["meshes"][mesh]["primitives"][0]["indices"]
@@ -524,7 +523,7 @@ fn gltf_origin_keeps_hierarchy_materials_and_images() {
         &WriteOptions::default(),
     )
     .unwrap();
-    publish("gltf_origin", &summary);
+    publish_summary("gltf_origin", &summary);
     let (json, buffers) = load_raw(&path);
     assert_eq!(json["asset"]["copyright"], "test");
     let nodes = json["nodes"].as_array().unwrap();
@@ -646,7 +645,7 @@ fn quantized_gltf_origin_puts_lods_on_a_child() {
         compression: Compression::None,
     };
     let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
-    publish("gltf_origin_quantized", &summary);
+    publish_summary("gltf_origin_quantized", &summary);
     let (json, _) = load_raw(&path);
     let nodes = json["nodes"].as_array().unwrap();
     assert!(nodes[1].get("mesh").is_none());
@@ -712,7 +711,7 @@ fn single_level_chain_has_no_msft_lod() {
     let dir = scratch("single");
     let path = dir.join("one.glb");
     let summary = write_lods(&path, &scene, &[lod], &WriteOptions::default()).unwrap();
-    publish("single_level", &summary);
+    publish_summary("single_level", &summary);
     let (json, _) = load_raw(&path);
     assert!(
         json.get("extensionsUsed").is_none(),
@@ -803,7 +802,7 @@ fn skins_survive_on_every_lod_node_unless_quantized() {
         &WriteOptions::default(),
     )
     .unwrap();
-    publish("gltf_skinned", &summary);
+    publish_summary("gltf_skinned", &summary);
     let (json, buffers) = load_raw(&path);
     let skin = &json["skins"][0];
     assert_eq!(skin["joints"], serde_json::json!([0, 1]));

@@ -2,6 +2,8 @@
 //! the same as GLB) with indexed triangles, a triangle strip, a fan, a
 //! points primitive, two meshes on a node hierarchy; then broken variants.
 
+mod support;
+
 use std::path::Path;
 
 use lodgen::io::{
@@ -9,6 +11,7 @@ use lodgen::io::{
 };
 use lodgen::scene::{Origin, Scene};
 use serde_json::{json, Value};
+use support::gltf::{base64, glb_bytes};
 
 const POSITIONS: [[f32; 3]; 5] = [
     [0.0, 0.0, 0.0],
@@ -17,27 +20,6 @@ const POSITIONS: [[f32; 3]; 5] = [
     [0.0, 1.0, 0.0],
     [2.0, 2.0, 0.0],
 ];
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
 
 /// The binary buffer (180 bytes) and the JSON document without buffer URI.
 fn document() -> (Value, Vec<u8>) {
@@ -108,29 +90,6 @@ fn gltf_bytes(mut doc: Value, bin: &[u8]) -> Vec<u8> {
         base64(bin)
     ));
     serde_json::to_vec_pretty(&doc).unwrap()
-}
-
-fn glb_bytes(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).unwrap();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
 }
 
 fn check_scene(s: &Scene) {

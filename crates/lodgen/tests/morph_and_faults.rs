@@ -5,50 +5,11 @@
 //! warning and exit code 3, and `--strict` makes it an error that writes
 //! nothing. Outputs go to `$LODGEN_TEST_OUT` for the glTF-Validator.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
 use serde_json::{json, Value};
-
-fn lodgen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodgen"))
-        .args(args)
-        .output()
-        .expect("the lodgen binary runs")
-}
-
-fn publish(file: &Path, name: &str) {
-    if let Some(dir) = std::env::var_os("LODGEN_TEST_OUT") {
-        let dir = PathBuf::from(dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::copy(file, dir.join(name)).unwrap();
-    }
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            out.push(if k <= chunk.len() {
-                A[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
-}
-
-fn f32s(v: impl IntoIterator<Item = f32>) -> Vec<u8> {
-    v.into_iter().flat_map(|x| x.to_le_bytes()).collect()
-}
+use support::gltf::{base64, f32_bytes as f32s, glb_json};
+use support::{lodgen, publish};
 
 /// A torus "Head" with one POSITION + NORMAL morph target ("inflate"), mesh
 /// weights, node extras and an animation of the weight; with `broken`, a
@@ -141,13 +102,6 @@ fn morph_scene(broken: bool) -> Value {
         }));
     }
     doc
-}
-
-/// The JSON chunk of a GLB.
-fn glb_json(path: &Path) -> Value {
-    let bytes = std::fs::read(path).unwrap();
-    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    serde_json::from_slice(&bytes[20..20 + len]).unwrap()
 }
 
 #[test]

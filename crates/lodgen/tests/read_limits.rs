@@ -5,49 +5,19 @@
 //! with an error naming the place while this thread's allocations stay
 //! small (a counting allocator, per thread so parallel tests do not mix).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+mod support;
+
 use std::path::Path;
 
 use lodgen::gltf_out::{write_lods, Compression, WriteOptions};
 use lodgen::io::{read_gltf, read_scene, ReadError};
 use lodgen::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh};
 use serde_json::{json, Value};
-
-struct Counting;
-
-thread_local! {
-    static LIVE: Cell<usize> = const { Cell::new(0) };
-    static PEAK: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = LIVE.try_with(|l| {
-            l.set(l.get() + layout.size());
-            let _ = PEAK.try_with(|p| p.set(p.get().max(l.get())));
-        });
-        // SAFETY: forwarded as is.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        let _ = LIVE.try_with(|l| l.set(l.get().saturating_sub(layout.size())));
-        // SAFETY: forwarded as is.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use support::alloc::peak_of;
+use support::gltf::base64;
 
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// Runs `f` and returns its result with the most bytes this thread had
-/// allocated at once above what it held before.
-fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let base = LIVE.with(Cell::get);
-    PEAK.with(|p| p.set(base));
-    let r = f();
-    (r, PEAK.with(Cell::get) - base)
-}
+static ALLOCATOR: support::alloc::Counting = support::alloc::Counting;
 
 const MB: usize = 1 << 20;
 
@@ -75,27 +45,6 @@ fn triangle_gltf(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     });
     edit(&mut doc);
     serde_json::to_vec(&doc).unwrap()
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            out.push(if k <= chunk.len() {
-                A[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 #[test]

@@ -8,47 +8,16 @@
 //! floor, except an object per face, which costs one `Primitive` each (about
 //! 60 bytes per input byte): there the bound is per object.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+mod support;
+
 use std::fmt::Write as _;
 use std::path::Path;
 
 use lodgen::io::{read_obj, read_smf, DECODED_BYTES_PER_INPUT_BYTE};
-
-struct Counting;
-
-thread_local! {
-    static LIVE: Cell<usize> = const { Cell::new(0) };
-    static PEAK: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = LIVE.try_with(|l| {
-            l.set(l.get() + layout.size());
-            let _ = PEAK.try_with(|p| p.set(p.get().max(l.get())));
-        });
-        // SAFETY: forwarded as is.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        let _ = LIVE.try_with(|l| l.set(l.get().saturating_sub(layout.size())));
-        // SAFETY: forwarded as is.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use support::alloc::peak_of;
 
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// The most bytes this thread had allocated at once while running `f`,
-/// above what it held before.
-fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let base = LIVE.with(Cell::get);
-    PEAK.with(|p| p.set(base));
-    let r = f();
-    (r, PEAK.with(Cell::get) - base)
-}
+static ALLOCATOR: support::alloc::Counting = support::alloc::Counting;
 
 /// About this many bytes per case: enough that fixed costs do not matter.
 const SIZE: usize = 1 << 18;

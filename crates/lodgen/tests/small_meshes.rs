@@ -3,24 +3,13 @@
 //! to the meshes that are simplified. Outputs are also copied to
 //! `$LODGEN_TEST_OUT` (when set) for the glTF-Validator run of `cargo xtask test`.
 
+mod support;
+
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-fn lodgen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodgen"))
-        .args(args)
-        .output()
-        .expect("the lodgen binary runs")
-}
-
-fn publish(file: &Path, name: &str) {
-    if let Some(dir) = std::env::var_os("LODGEN_TEST_OUT") {
-        let dir = PathBuf::from(dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::copy(file, dir.join(name)).unwrap();
-    }
-}
+use support::{lodgen, publish};
 
 /// A named object: positions and triangles.
 type Object<'a> = (&'a str, Vec<[f32; 3]>, Vec<[u32; 3]>);

@@ -11,47 +11,21 @@
 //! Needs `node`, Chromium and `tests/js/node_modules`; without them the test
 //! says so and passes, unless `LODGEN_BROWSER_TEST=1` or `CI=true`.
 
-use std::path::PathBuf;
+mod support;
+
 use std::process::Command;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use support::{browser, root};
 
-fn missing_tools() -> Vec<String> {
-    let mut missing = Vec::new();
-    if Command::new("node").arg("--version").output().is_err() {
-        missing.push("node".to_string());
-    }
-    let chromium = std::env::var("LODGEN_CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    if !std::path::Path::new(&chromium).exists() {
-        missing.push(chromium);
-    }
-    for pkg in [
+#[test]
+fn three_loader_streams_every_level_in_headless_chromium() {
+    let packages = [
         "playwright-core",
         "three",
         "meshoptimizer",
         "three-gltf-extensions",
-    ] {
-        let p = root().join("tests/js/node_modules").join(pkg);
-        if !p.exists() {
-            missing.push(format!("{} (npm ci in tests/js)", p.display()));
-        }
-    }
-    missing
-}
-
-#[test]
-fn three_loader_streams_every_level_in_headless_chromium() {
-    let missing = missing_tools();
-    if !missing.is_empty() {
-        let required = std::env::var("LODGEN_BROWSER_TEST").is_ok_and(|v| v == "1")
-            || std::env::var("CI").as_deref() == Ok("true");
-        assert!(
-            !required,
-            "LODGEN_BROWSER_TEST=1 or CI=true, but missing: {missing:?}"
-        );
-        eprintln!("three.js browser test skipped, missing: {missing:?}");
+    ];
+    if !browser::ready("three.js browser test", &packages) {
         return;
     }
     let input =
@@ -70,19 +44,14 @@ fn three_loader_streams_every_level_in_headless_chromium() {
     assert!(status.success());
     let out = root().join("target/test-out/three");
     std::fs::create_dir_all(&out).unwrap();
-    let result = Command::new("node")
-        .arg(root().join("tests/js/three-lod.mjs"))
-        .args(["--lodgen", bin])
-        .arg(&glb)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("running node");
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&result.stdout),
-        String::from_utf8_lossy(&result.stderr)
+    browser::run_script(
+        "three-lod.mjs",
+        &[
+            "--lodgen",
+            bin,
+            glb.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
     );
-    eprintln!("{log}");
-    assert!(result.status.success(), "three-lod.mjs failed:\n{log}");
 }

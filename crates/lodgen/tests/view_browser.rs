@@ -14,42 +14,15 @@
 //! passes, unless `LODGEN_BROWSER_TEST=1` (as in `.ci/run`) makes their
 //! absence a failure.
 
+mod support;
+
 use lodgen::view::{ViewData, ViewServer};
 use lodgen_pm::shapes::torus_knot;
-use std::path::PathBuf;
-use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn missing_tools() -> Vec<String> {
-    let mut missing = Vec::new();
-    if Command::new("node").arg("--version").output().is_err() {
-        missing.push("node".to_string());
-    }
-    let chromium = std::env::var("LODGEN_CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    if !std::path::Path::new(&chromium).exists() {
-        missing.push(chromium);
-    }
-    let pw = root().join("tests/js/node_modules/playwright-core");
-    if !pw.exists() {
-        missing.push(format!("{} (npm install in tests/js)", pw.display()));
-    }
-    missing
-}
+use support::{browser, root};
 
 #[test]
 fn viewer_page_matches_levels_in_headless_chromium() {
-    let missing = missing_tools();
-    if !missing.is_empty() {
-        let required = std::env::var("LODGEN_BROWSER_TEST").is_ok_and(|v| v == "1")
-            || std::env::var("CI").as_deref() == Ok("true");
-        assert!(
-            !required,
-            "LODGEN_BROWSER_TEST=1 or CI=true, but missing: {missing:?}"
-        );
-        eprintln!("browser test skipped, missing: {missing:?}");
+    if !browser::ready("viewer browser test", &["playwright-core"]) {
         return;
     }
     let bunny = lodgen::assets::shared_assets_dir().join("bunny.obj");
@@ -92,23 +65,24 @@ fn run_viewer(data: ViewData, out: &std::path::Path) {
     let url = server.url();
     let stop = server.stopper();
     let thread = std::thread::spawn(move || server.run());
-    let result = Command::new("node")
-        .arg(root().join("tests/js/viewer.mjs"))
-        .args(["--url", &url, "--expect"])
-        .arg(&expect)
-        .arg("--out")
-        .arg(out)
-        .output();
+    let run = std::panic::catch_unwind(|| {
+        browser::run_script(
+            "viewer.mjs",
+            &[
+                "--url",
+                &url,
+                "--expect",
+                expect.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        )
+    });
     stop.stop();
     thread.join().unwrap();
-    let result = result.expect("running node");
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&result.stdout),
-        String::from_utf8_lossy(&result.stderr)
-    );
-    eprintln!("{log}");
-    assert!(result.status.success(), "viewer.mjs failed:\n{log}");
+    if let Err(panic) = run {
+        std::panic::resume_unwind(panic);
+    }
     let shots = std::fs::read_dir(out)
         .unwrap()
         .filter_map(Result::ok)

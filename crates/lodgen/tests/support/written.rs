@@ -1,8 +1,7 @@
-//! Shared helpers of the `gltf_out_*` tests: a generated icosphere, LOD chains
-//! made with `meshopt::simplify`, scratch directories, a minimal accessor
-//! decoder (plain, quantized and meshopt-compressed data) and copies of every
+//! Writer tests' helpers: a generated icosphere, LOD chains made with
+//! `meshopt::simplify`, scratch directories, a minimal accessor decoder
+//! (plain, quantized and meshopt-compressed data) and copies of every
 //! output into `$LODGEN_TEST_OUT` for the glTF-Validator CI step.
-#![allow(dead_code)]
 
 use std::path::Path;
 
@@ -111,7 +110,7 @@ pub fn scratch(test: &str) -> Scratch {
 }
 
 /// Copies every written file into `$LODGEN_TEST_OUT/<prefix>/` when set.
-pub fn publish(prefix: &str, summary: &WriteSummary) {
+pub fn publish_summary(prefix: &str, summary: &WriteSummary) {
     let Some(out) = std::env::var_os("LODGEN_TEST_OUT") else {
         return;
     };
@@ -256,6 +255,8 @@ pub fn accessor_values(json: &Value, buffers: &[Vec<u8>], accessor: usize) -> Ve
                         (5126, _) => f32::from_le_bytes(b.try_into().unwrap()) as f64,
                         (5125, false) => u32::from_le_bytes(b.try_into().unwrap()) as f64,
                         (5123, false) => u16::from_le_bytes(b.try_into().unwrap()) as f64,
+                        (5121, false) => b[0] as f64,
+                        (5121, true) => b[0] as f64 / 255.0,
                         (5123, true) => u16::from_le_bytes(b.try_into().unwrap()) as f64 / 65535.0,
                         (5122, true) => {
                             (i16::from_le_bytes(b.try_into().unwrap()) as f64 / 32767.0).max(-1.0)
