@@ -58,8 +58,12 @@ pub enum Origin {
     Gltf {
         /// Path of the input file (for resolving relative image URIs).
         path: PathBuf,
-        /// The input document, as parsed JSON root.
+        /// The input document, as parsed JSON root (buffer views: after
+        /// `EXT_meshopt_compression` views were decoded into `buffers`).
         document: Box<gltf_json::Root>,
+        /// The input's JSON as written, which the writer copies from
+        /// (names, extras, extensions and numbers untouched).
+        json: Box<serde_json::Value>,
         /// The contents of every buffer, in buffer order.
         buffers: Vec<Vec<u8>>,
     },

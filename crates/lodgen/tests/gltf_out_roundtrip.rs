@@ -9,6 +9,7 @@ use std::path::Path;
 use lodgen::gltf_out::{write_lods, Compression, LevelProblem, WriteError, WriteOptions};
 use lodgen::scene::{LodLevel, LodMesh, Material, Origin, Primitive, Scene, SourceMesh};
 use serde_json::Value;
+use support::gltf::PNG_2X2;
 use support::written::*;
 
 fn sphere_scene(n: u32) -> (Scene, Primitive) {
@@ -427,13 +428,6 @@ fn failures_leave_no_file() {
     assert_eq!(all_files(&dir), before, "no partial or temporary files");
 }
 
-const PNG_2X2: [u8; 75] = [
-    137, 80, 78, 71, 13, 10, 26, 10, 0, 0, 0, 13, 73, 72, 68, 82, 0, 0, 0, 2, 0, 0, 0, 2, 8, 2, 0,
-    0, 0, 253, 212, 154, 115, 0, 0, 0, 18, 73, 68, 65, 84, 120, 156, 99, 248, 207, 192, 192, 0,
-    194, 12, 255, 65, 0, 0, 38, 232, 6, 250, 18, 64, 95, 204, 0, 0, 0, 0, 73, 69, 78, 68, 174, 66,
-    96, 130,
-];
-
 const KEYS: [f32; 2] = [0.0, 1.0];
 const TRANSLATIONS: [[f32; 3]; 2] = [[1.0, 2.0, 3.0], [1.0, 5.0, 3.0]];
 
@@ -450,7 +444,7 @@ fn gltf_scene() -> (Scene, LodMesh) {
         indices,
         ..Primitive::default()
     };
-    let doc: gltf_json::Root = serde_json::from_value(serde_json::json!({
+    let json = serde_json::json!({
         "asset": {"version": "2.0", "copyright": "test"},
         "extensionsUsed": ["EXT_mesh_gpu_instancing"],
         "scene": 0,
@@ -483,8 +477,8 @@ fn gltf_scene() -> (Scene, LodMesh) {
             {"buffer": 0, "byteOffset": 88, "byteLength": 24}
         ],
         "buffers": [{"byteLength": 112}]
-    }))
-    .unwrap();
+    });
+    let doc: gltf_json::Root = serde_json::from_value(json.clone()).unwrap();
     let mut data = vec![0u8; 4];
     data.extend_from_slice(&PNG_2X2);
     data.resize(80, 0);
@@ -503,6 +497,7 @@ fn gltf_scene() -> (Scene, LodMesh) {
         origin: Origin::Gltf {
             path: "in.gltf".into(),
             document: Box::new(doc),
+            json: Box::new(json),
             buffers: vec![data],
         },
         warnings: Vec::new(),
@@ -753,7 +748,7 @@ fn skinned_scene() -> (Scene, LodMesh) {
         indices,
         ..Primitive::default()
     };
-    let doc: gltf_json::Root = serde_json::from_value(serde_json::json!({
+    let json = serde_json::json!({
         "asset": {"version": "2.0"},
         "scene": 0,
         "scenes": [{"nodes": [0, 2]}],
@@ -770,8 +765,8 @@ fn skinned_scene() -> (Scene, LodMesh) {
         ],
         "bufferViews": [{"buffer": 0, "byteLength": 128}],
         "buffers": [{"byteLength": 128}]
-    }))
-    .unwrap();
+    });
+    let doc: gltf_json::Root = serde_json::from_value(json.clone()).unwrap();
     let data: Vec<u8> = IBM.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     let scene = Scene {
         meshes: vec![SourceMesh {
@@ -782,6 +777,7 @@ fn skinned_scene() -> (Scene, LodMesh) {
         origin: Origin::Gltf {
             path: "in.gltf".into(),
             document: Box::new(doc),
+            json: Box::new(json),
             buffers: vec![data],
         },
         warnings: Vec::new(),

@@ -75,22 +75,41 @@ const DROPPED_EXTENSIONS: &[&str] = &[
 
 /// The input document with its meshes replaced by the LOD chains, its
 /// skins, animations and images carried into the output's non-LOD range.
+/// The input glTF as [`crate::scene::Origin::Gltf`] holds it.
+pub(super) struct InputGltf<'a> {
+    /// The input file (relative image URIs).
+    pub path: &'a Path,
+    /// The parsed document: its buffer views point into `buffers`
+    /// (decoded `EXT_meshopt_compression` views included).
+    pub document: &'a gltf_json::Root,
+    /// The JSON as written, which the output copies untouched.
+    pub json: &'a Value,
+    pub buffers: &'a [Vec<u8>],
+}
+
 pub(super) fn gltf_document(
-    input_path: &Path,
-    document: &gltf_json::Root,
-    buffers: &[Vec<u8>],
+    input: &InputGltf<'_>,
     lods: &[LodMesh],
     chains: &[PreparedChain],
     chain_meshes: &[Vec<usize>],
     out: &mut Builder,
 ) -> Result<Map<String, Value>, WriteError> {
-    let mut root = match serde_json::to_value(document)? {
-        Value::Object(m) => m,
+    let InputGltf {
+        path: input_path,
+        document,
+        json,
+        buffers,
+    } = *input;
+    let mut root = match json {
+        Value::Object(m) => m.clone(),
         _ => return Err(input_err("/".into(), "not a JSON object".into())),
     };
     let in_accessors = take_array(&mut root, "accessors");
-    let in_buffer_views = take_array(&mut root, "bufferViews");
-    for key in ["buffers", "meshes"] {
+    let in_buffer_views = match serde_json::to_value(&document.buffer_views)? {
+        Value::Array(views) => views,
+        _ => Vec::new(),
+    };
+    for key in ["buffers", "bufferViews", "meshes"] {
         root.remove(key);
     }
     keep_skins(&mut root, &in_accessors, &in_buffer_views, buffers, out)?;

@@ -10,6 +10,7 @@ use serde_json::{Map, Value};
 use super::builder::{Builder, Payload, SHARED};
 use super::error::WriteError;
 use super::prepare::PreparedChain;
+use crate::io::decode_base64;
 use crate::scene::Warning;
 
 /// An error in the input document at JSON path `path`.
@@ -213,19 +214,17 @@ pub(super) fn keep_animations(
 /// and extensions cannot follow (a level's primitives are new) and are
 /// named in a warning, as are `weights` that no longer match the targets.
 pub(super) fn carry_mesh_properties(
-    document: &gltf_json::Root,
+    json: &Value,
     chains: &mut [PreparedChain],
     warnings: &mut Vec<Warning>,
-) -> Result<(), WriteError> {
+) {
     for chain in chains {
-        let Some(mesh) = document.meshes.get(chain.source) else {
+        let Some(Value::Object(mesh)) = json.pointer(&format!("/meshes/{}", chain.source)) else {
             continue;
         };
+        let mut mesh = mesh.clone();
         let (m, name) = (chain.source, &chain.name);
         let at = format!("meshes[{m}] (mesh `{name}`)");
-        let Value::Object(mut mesh) = serde_json::to_value(mesh)? else {
-            continue;
-        };
         for key in ["weights", "extras", "extensions"] {
             if let Some(v) = mesh.remove(key) {
                 chain.carried.insert(key.into(), v);
@@ -269,11 +268,10 @@ pub(super) fn carry_mesh_properties(
             }
         }
     }
-    Ok(())
 }
 
-/// Images: copies buffer-view images and embeds external files into the
-/// non-LOD range; data URIs stay as they are.
+/// Images: copies buffer-view images and embeds external files and base64
+/// data URIs into the non-LOD range (other data URIs stay as they are).
 pub(super) fn embed_images(
     root: &mut Map<String, Value>,
     input_path: &Path,
@@ -307,16 +305,26 @@ pub(super) fn embed_images(
                     .ok_or_else(|| input_err(at.clone(), "bufferView exceeds its buffer".into()))?
                     .to_vec()
             } else if let Some(uri) = obj.get("uri").and_then(Value::as_str) {
-                if uri.starts_with("data:") {
-                    continue;
+                if let Some(data) = uri.strip_prefix("data:") {
+                    // base64 image data goes into a buffer view too (a GLB
+                    // should hold no data URI); anything else stays as it is
+                    match data
+                        .split_once(";base64,")
+                        .and_then(|(_, b)| decode_base64(b))
+                        .filter(|bytes| sniff_mime(bytes).is_some())
+                    {
+                        Some(bytes) => bytes,
+                        None => continue,
+                    }
+                } else {
+                    let file = input_path
+                        .parent()
+                        .unwrap_or(Path::new(""))
+                        .join(percent_decode(uri));
+                    std::fs::read(&file).map_err(|e| {
+                        input_err(at.clone(), format!("reading image {}: {e}", file.display()))
+                    })?
                 }
-                let file = input_path
-                    .parent()
-                    .unwrap_or(Path::new(""))
-                    .join(percent_decode(uri));
-                std::fs::read(&file).map_err(|e| {
-                    input_err(at.clone(), format!("reading image {}: {e}", file.display()))
-                })?
             } else {
                 return Err(input_err(at, "image has neither uri nor bufferView".into()));
             };

@@ -16,9 +16,10 @@
 //!   Coarser nodes carry the finest node's local transform (`matrix` or TRS),
 //!   no children.
 //! - `Origin::Flat`: one scene with one root node per chain.
-//! - `Origin::Gltf`: the input's nodes, hierarchy, transforms, cameras,
-//!   materials, textures, samplers and images are kept (images stored in buffer
-//!   views are copied, external image files are embedded); the node that
+//! - `Origin::Gltf`: the input's JSON as written is the output's, so nodes,
+//!   hierarchy, transforms, cameras, lights, materials, textures, samplers,
+//!   images, names, extras and extensions are kept untouched (images stored
+//!   in buffer views are copied, external image files are embedded); the node that
 //!   referenced mesh `m` gets level 0 of `m`'s chain. Animations of node
 //!   transforms are kept (keyframes copied into the non-LOD range; they drive
 //!   the node they target, so in unquantized output the coarser LOD nodes do
@@ -72,7 +73,7 @@ use std::path::Path;
 use crate::scene::{LodMesh, Origin, Scene};
 
 use builder::Builder;
-use document::{flat_document, gltf_document};
+use document::{flat_document, gltf_document, InputGltf};
 pub use error::{LevelProblem, WriteError};
 use files::{write_atomically, Format};
 pub use options::{Compression, MeshSummary, WriteOptions, WriteSummary};
@@ -119,8 +120,8 @@ pub fn write_lods_with(
     };
     let mut chains = prepare_chains(scene, lods, material_count)?;
     let mut warnings = Vec::new();
-    if let Origin::Gltf { document, .. } = &scene.origin {
-        input::carry_mesh_properties(document, &mut chains, &mut warnings)?;
+    if let Origin::Gltf { json, .. } = &scene.origin {
+        input::carry_mesh_properties(json, &mut chains, &mut warnings);
     }
     let level_count = chains.iter().map(|c| c.levels.len()).max().unwrap_or(0);
 
@@ -140,13 +141,17 @@ pub fn write_lods_with(
     let mut root = match &scene.origin {
         Origin::Flat => flat_document(scene, &chains, &chain_meshes, &mut out),
         Origin::Gltf {
-            path: input_path,
+            path,
             document,
+            json,
             buffers,
         } => gltf_document(
-            input_path,
-            document,
-            buffers,
+            &InputGltf {
+                path,
+                document,
+                json,
+                buffers,
+            },
             lods,
             &chains,
             &chain_meshes,

@@ -84,7 +84,7 @@ pub(super) fn fan_to_list(v: &[u32]) -> Vec<u32> {
 }
 
 /// Standard base64 (padding optional); `None` on any invalid character.
-pub(super) fn decode_base64(s: &str) -> Option<Vec<u8>> {
+pub(crate) fn decode_base64(s: &str) -> Option<Vec<u8>> {
     let s = s.trim_end_matches('=');
     let mut out = Vec::with_capacity(s.len() * 3 / 4);
     let mut acc = 0u32;

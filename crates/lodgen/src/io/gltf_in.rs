@@ -15,8 +15,10 @@
 //! triangle, are left out of [`SourceMesh::primitives`]; a mesh left with no
 //! triangle at all is an error naming it, so `Scene::meshes[i]` is always
 //! glTF mesh `i`. Vertices are kept as stored (no compaction), texture
-//! coordinates keep glTF's convention. The parsed document and the buffers
-//! go to [`Origin::Gltf`] for the writer.
+//! coordinates keep glTF's convention. The parsed document, the JSON as
+//! written and the buffers go to [`Origin::Gltf`] for the writer. A required
+//! extension is accepted when the reader handles it or it changes no mesh
+//! data (material, texture and light extensions).
 
 use std::path::{Path, PathBuf};
 
@@ -32,6 +34,18 @@ use crate::scene::{Material, MorphTarget, Origin, Primitive, Scene, SourceMesh, 
 /// Required extensions this reader supports although the `gltf` crate's
 /// validation does not: quantized attributes are plain integer accessors.
 const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization", super::meshopt_in::EXTENSION];
+
+/// Whether a required extension leaves the mesh data as the core spec reads
+/// it: material, texture and light extensions, which the writer copies
+/// untouched (and keeps required). Any other unknown required extension
+/// (`KHR_draco_mesh_compression`, a vendor's) is refused by name.
+fn passes_through(extension: &str) -> bool {
+    HANDLED_EXTENSIONS.contains(&extension)
+        || ["KHR_materials_", "KHR_texture_", "EXT_texture_"]
+            .iter()
+            .any(|p| extension.starts_with(p))
+        || extension == "KHR_lights_punctual"
+}
 
 /// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
 /// resolved against the directory of `path`. What cannot be read in one
@@ -66,7 +80,7 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     let required = std::mem::take(&mut root.extensions_required);
     root.extensions_required = required
         .iter()
-        .filter(|e| !HANDLED_EXTENSIONS.contains(&e.as_str()))
+        .filter(|e| !passes_through(e))
         .cloned()
         .collect();
     // the gltf crate's validation indexes POSITION accessors unchecked
@@ -99,33 +113,31 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     })?;
     let mut root = document.into_json();
     root.extensions_required = required;
-    // EXT_meshopt_compression: decode compressed views up front (the
-    // extension's data is not in the typed document, so read the raw JSON)
+    // The JSON as written: what the writer copies (the typed document
+    // widens f32 numbers and drops what it has no field for), and the
+    // EXT_meshopt_compression data, which the typed document lacks
+    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| {
+        r.err(
+            Location::File,
+            ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
+        )
+    })?;
     let compressed = root
         .extensions_used
         .iter()
         .any(|e| e == super::meshopt_in::EXTENSION);
-    let raw: Option<serde_json::Value> = if compressed {
-        Some(serde_json::from_slice(json).map_err(|e| {
-            r.err(
-                Location::File,
-                ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
-            )
-        })?)
+    let fallback = if compressed {
+        super::meshopt_in::fallback_buffers(&raw)
     } else {
-        None
+        Vec::new()
     };
-    let fallback = raw
-        .as_ref()
-        .map(super::meshopt_in::fallback_buffers)
-        .unwrap_or_default();
     let mut buffers = r.load_buffers(&root, blob, &fallback)?;
     // the memory cap: decoded data per byte of input (file and buffers)
     let input = src.len() as u64 + buffers.iter().map(|b| b.len() as u64).sum::<u64>();
     let mut budget = super::common::DECODED_BYTES_FLOOR
         .saturating_add(input.saturating_mul(super::common::DECODED_BYTES_PER_INPUT_BYTE));
-    if let Some(raw) = &raw {
-        super::meshopt_in::decompress(raw, &mut root, &mut buffers, &mut budget)
+    if compressed {
+        super::meshopt_in::decompress(&raw, &mut root, &mut buffers, &mut budget)
             .map_err(|(at, message)| r.json_err(&at, message))?;
     }
     r.budget.set(budget);
@@ -146,6 +158,7 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         origin: Origin::Gltf {
             path: path.to_path_buf(),
             document: Box::new(root),
+            json: Box::new(raw),
             buffers,
         },
         warnings,
