@@ -3,7 +3,8 @@
 //! animation keeps all of it at every level (plain and `--quantize`); a
 //! mesh whose triangles are all degenerate is written unsimplified with a
 //! warning and exit code 3, and `--strict` makes it an error that writes
-//! nothing. Outputs go to `$LODGEN_TEST_OUT` for the glTF-Validator.
+//! nothing. Outputs go to `$LODGEN_TEST_OUT` for the glTF-Validator;
+//! Babylon.js in headless Chromium plays the weight animation.
 
 mod support;
 
@@ -186,4 +187,43 @@ fn a_degenerate_mesh_is_written_unsimplified_with_a_warning_unless_strict() {
     assert_eq!(r.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("sliver"), "{stderr}");
     assert!(!out.exists());
+}
+
+/// Babylon.js in headless Chromium (`tests/js/babylon-morph.mjs`) loads the
+/// morphed head (every MSFT_lod level, plain and `--quantize`) and plays
+/// `breathe`: the shown level has the target `inflate`, and its influence
+/// follows the file's keyframes, with no page or console error.
+#[test]
+fn babylon_animates_the_morph_weight_in_headless_chromium() {
+    if !support::browser::ready(
+        "Babylon.js morph test",
+        &[
+            "playwright-core",
+            "@babylonjs/core",
+            "@babylonjs/loaders",
+            "esbuild",
+        ],
+    ) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("head.gltf");
+    std::fs::write(&input, serde_json::to_vec(&morph_scene(false)).unwrap()).unwrap();
+    for (name, extra) in [("plain", &[][..]), ("quantized", &["--quantize"][..])] {
+        let out = dir.path().join(format!("head-{name}.glb"));
+        let mut args = vec![input.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"];
+        args.extend_from_slice(extra);
+        let r = lodgen(&args);
+        assert_eq!(r.status.code(), Some(0), "{}", support::stderr(&r));
+        let json = glb_json(&out);
+        let node = json["animations"][0]["channels"][0]["target"]["node"].to_string();
+        let log = support::browser::run_script(
+            "babylon-morph.mjs",
+            &[out.to_str().unwrap(), "breathe", &node],
+        );
+        assert!(
+            log.contains("babylon-morph: head-") && log.contains(": ok"),
+            "{log}"
+        );
+    }
 }
