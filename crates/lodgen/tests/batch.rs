@@ -13,14 +13,7 @@ fn lodgen(args: &[&str], cwd: &Path) -> Output {
 }
 
 fn obj_text(m: &lodgen_pm::Mesh) -> String {
-    let mut s = String::new();
-    for p in &m.positions {
-        s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
-    }
-    for t in &m.triangles {
-        s += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
-    }
-    s
+    support::obj_text(&[("", &m.positions, &m.triangles)])
 }
 
 fn ply_text(m: &lodgen_pm::Mesh) -> String {

@@ -8,7 +8,7 @@ mod support;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use support::{lodgen, stderr, stdout};
+use support::{lodgen, obj_text, stderr, stdout};
 
 fn tmp(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -28,14 +28,7 @@ fn publish(files: &[&Path]) {
 
 fn write_torus_obj(path: &Path) {
     let m = lodgen_pm::shapes::torus(1.0, 0.35, 48, 24);
-    let mut s = String::from("o torus\n");
-    for p in &m.positions {
-        s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
-    }
-    for t in &m.triangles {
-        s += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
-    }
-    std::fs::write(path, s).unwrap();
+    std::fs::write(path, obj_text(&[("torus", &m.positions, &m.triangles)])).unwrap();
 }
 
 /// Triangle count of each level of the first mesh in a `--report`.

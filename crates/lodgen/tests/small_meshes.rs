@@ -16,19 +16,11 @@ type Object<'a> = (&'a str, Vec<[f32; 3]>, Vec<[u32; 3]>);
 
 /// One OBJ object per (name, positions, triangles).
 fn write_obj(path: &Path, objects: &[Object<'_>]) {
-    let mut s = String::new();
-    let mut base = 1;
-    for (name, positions, triangles) in objects {
-        s += &format!("o {name}\n");
-        for p in positions {
-            s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
-        }
-        for t in triangles {
-            s += &format!("f {} {} {}\n", t[0] + base, t[1] + base, t[2] + base);
-        }
-        base += positions.len() as u32;
-    }
-    std::fs::write(path, s).unwrap();
+    let objects: Vec<support::ObjObject<'_>> = objects
+        .iter()
+        .map(|(n, p, t)| (*n, p.as_slice(), t.as_slice()))
+        .collect();
+    std::fs::write(path, support::obj_text(&objects)).unwrap();
 }
 
 fn quad() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {

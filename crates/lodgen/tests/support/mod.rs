@@ -99,3 +99,26 @@ pub fn validate(dir: &Path) -> Option<String> {
     assert!(out.status.success(), "gltf-validator:\n{log}");
     Some(log)
 }
+
+/// A named object of an OBJ file: name, positions, triangles.
+pub type ObjObject<'a> = (&'a str, &'a [[f32; 3]], &'a [[u32; 3]]);
+
+/// OBJ text of `objects`, each an `o NAME` group when the name is not
+/// empty, indices continuing across objects.
+pub fn obj_text(objects: &[ObjObject<'_>]) -> String {
+    let mut s = String::new();
+    let mut base = 1;
+    for (name, positions, triangles) in objects {
+        if !name.is_empty() {
+            s += &format!("o {name}\n");
+        }
+        for p in *positions {
+            s += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+        for t in *triangles {
+            s += &format!("f {} {} {}\n", t[0] + base, t[1] + base, t[2] + base);
+        }
+        base += positions.len() as u32;
+    }
+    s
+}

@@ -297,3 +297,87 @@ pub fn scene_nodes(json: &Value) -> Vec<usize> {
     seen.sort();
     seen
 }
+
+/// The MSFT_lod head node and its ids.
+pub fn lod_head(json: &Value) -> (usize, Vec<usize>) {
+    let nodes = json["nodes"].as_array().unwrap();
+    let head = nodes
+        .iter()
+        .position(|n| n.pointer("/extensions/MSFT_lod").is_some())
+        .expect("a node with MSFT_lod");
+    let ids = nodes[head]["extensions"]["MSFT_lod"]["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    (head, ids)
+}
+
+/// Reads `path` with `gltf::import` and checks every level of the single
+/// chain against `lod`: triangle count, triangles by position, normals unit,
+/// POSITION min/max, MSFT_lod ids, coverage, scene membership.
+pub fn check_round_trip(path: &Path, lod: &LodMesh) {
+    let (doc, buffers, _) = gltf::import(path).expect("gltf crate reads the output");
+    let (json, _) = load_raw(path);
+    let (head, ids) = lod_head(&json);
+    assert_eq!(ids.len(), lod.levels.len() - 1);
+    let coverage: Vec<f64> = json["nodes"][head]["extras"]["MSFT_screencoverage"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let expected: Vec<f64> = lod.levels.iter().map(|l| l.screen_coverage).collect();
+    assert_eq!(coverage, expected);
+    assert!(coverage.windows(2).all(|w| w[0] > w[1]), "{coverage:?}");
+    let used = json["extensionsUsed"].as_array().unwrap();
+    assert!(used.iter().any(|e| e == "MSFT_lod"));
+    let required = json["extensionsRequired"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    assert!(!required.iter().any(|e| e == "MSFT_lod"));
+    let in_scene = scene_nodes(&json);
+    assert!(in_scene.contains(&head));
+    for id in &ids {
+        assert!(!in_scene.contains(id), "coarser node {id} is in a scene");
+    }
+
+    let chain: Vec<usize> = std::iter::once(head).chain(ids).collect();
+    for (k, &n) in chain.iter().enumerate() {
+        let node = doc.nodes().nth(n).unwrap();
+        let mesh = node.mesh().expect("level node has a mesh");
+        let mut got = Vec::new();
+        let mut got_positions = Vec::new();
+        let mut triangles = 0;
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+            let normals: Vec<[f32; 3]> = reader.read_normals().expect("normals").collect();
+            assert_eq!(normals.len(), positions.len());
+            for nrm in &normals {
+                let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+                assert!((len - 1.0).abs() < 1e-5);
+            }
+            let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            triangles += indices.len() / 3;
+            let bb = prim.bounding_box();
+            for p in &positions {
+                let inside = (0..3).all(|a| p[a] >= bb.min[a] && p[a] <= bb.max[a]);
+                assert!(inside, "{p:?} outside POSITION min/max");
+            }
+            let base = got_positions.len() as u32;
+            got_positions.extend(positions);
+            got.extend(indices.iter().map(|i| i + base));
+        }
+        let level = &lod.levels[k];
+        assert_eq!(triangles, level.triangle_count(), "level {k}");
+        let want_prim = &level.primitives[0];
+        assert_eq!(
+            canonical_triangles(&got_positions, &got),
+            canonical_triangles(&want_prim.positions, &want_prim.indices),
+            "level {k} triangles differ"
+        );
+    }
+}
