@@ -352,6 +352,34 @@ fn vertex_samples_count_towards_the_max_only() {
     assert!(without.a_to_b.max > 3f64.sqrt() * e * 0.95);
 }
 
+/// The vertices' share of the maximum is exact although vertices nearer than the running
+/// maximum are settled by one triangle test: with vertex samples, the maximum is the larger of
+/// the area samples' maximum and the brute-force maximum over the vertices, bit for bit.
+#[test]
+fn vertex_maximum_is_exact() {
+    let (fine, coarse) = fine_and_coarse();
+    // (a spike on the fine mesh, so that a vertex holds the maximum one way)
+    let mut spiky = fine.clone();
+    spiky.positions[1830][2] += 0.05;
+    for (a, b) in [(&spiky, &coarse), (&coarse, &spiky), (&fine, &coarse)] {
+        let with = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
+        let without = measure(
+            a.r(),
+            b.r(),
+            &MeasureOptions::DEFAULT.with_vertex_samples(false),
+        )
+        .unwrap();
+        let to = TriangleBvh::new(b.r()).unwrap();
+        let vertex_max = a
+            .positions
+            .iter()
+            .map(|p| to.closest_point(p.map(f64::from)).unwrap().0)
+            .fold(0.0, f64::max)
+            .sqrt();
+        assert_eq!(with.a_to_b.max, without.a_to_b.max.max(vertex_max));
+    }
+}
+
 #[test]
 fn translation_bounds_the_distance() {
     // Every point p of A has p + t on B, so no one-sided distance exceeds |t|.

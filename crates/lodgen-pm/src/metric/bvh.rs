@@ -396,6 +396,30 @@ impl TriangleBvh {
         Some(best)
     }
 
+    /// The squared distance from `p` to the surface when it exceeds `floor` (a squared
+    /// distance), else `None`; with the slot of the answer, or of `hint` when that triangle
+    /// alone shows the distance to be at most `floor` (then nothing else is searched). For a
+    /// maximum over many points: the points nearer than the running maximum cost one triangle
+    /// test each. `None` also for an empty hierarchy.
+    #[inline]
+    pub(crate) fn farther_than(
+        &self,
+        p: [f64; 3],
+        floor: f64,
+        hint: Option<u32>,
+    ) -> (Option<f64>, Option<u32>) {
+        if let Some(h) = hint {
+            let [a, b, c] = self.tris[h as usize].map(widen);
+            if distance_squared(p, closest_point_on_triangle(p, a, b, c)) <= floor {
+                return (None, hint);
+            }
+        }
+        match self.closest_slot(p, hint) {
+            Some((d2, slot, _)) => ((d2 > floor).then_some(d2), Some(slot)),
+            None => (None, None),
+        }
+    }
+
     /// Depth-first branch and bound from internal node 0, nearer children first.
     #[inline]
     fn search(&self, p: [f64; 3], skip: u32, best: &mut (f64, u32, [f64; 3])) {

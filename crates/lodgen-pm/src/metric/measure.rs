@@ -435,6 +435,52 @@ fn measure_points(
     partials.into_iter().fold(Partial::ZERO, Partial::merge)
 }
 
+/// Like [`measure_points`] when only the maximum of the squared distances matters and it is at
+/// least `floor`: `max2` is the exact maximum of `floor` and every point's squared distance,
+/// `count` the number of points; `sum` and `sum2` are left at 0. A point whose distance to the
+/// previous answer's triangle is already at most the running maximum is settled by that one
+/// triangle test. Chunks as in [`measure_points`], so the result does not depend on the number
+/// of threads (a maximum does not depend on the order anyway).
+fn max_above(
+    count: usize,
+    to: &TriangleBvh,
+    floor: f64,
+    point: impl Fn(usize, &mut usize) -> [f64; 3] + Sync,
+) -> Partial {
+    let chunks = count.div_ceil(CHUNK);
+    let partials: Vec<Partial> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut acc = Partial {
+                max2: floor,
+                ..Partial::ZERO
+            };
+            if to.is_empty() {
+                acc.max2 = f64::INFINITY;
+            }
+            let mut hint = None;
+            let mut cursor = usize::MAX;
+            let range = c * CHUNK..((c + 1) * CHUNK).min(count);
+            acc.count = range.len();
+            for i in range {
+                let (d2, h) = to.farther_than(point(i, &mut cursor), acc.max2, hint);
+                hint = h;
+                if let Some(d2) = d2 {
+                    acc.max2 = d2;
+                }
+            }
+            acc
+        })
+        .collect();
+    partials.into_iter().fold(
+        Partial {
+            max2: floor,
+            ..Partial::ZERO
+        },
+        Partial::merge,
+    )
+}
+
 /// SplitMix64 output number `k` of the stream that starts at `seed`.
 #[inline]
 fn splitmix64(seed: u64, k: u64) -> u64 {
@@ -601,9 +647,14 @@ fn measure_from(
     });
     let vertices = if vertex_samples {
         let list = &set.vertices;
-        measure_points(list.len(), to, |i, _| {
-            widen(from.positions[list[i] as usize])
-        })
+        let vertex = |i: usize, _: &mut usize| widen(from.positions[list[i] as usize]);
+        if area.count > 0 {
+            // Vertices only count towards the maximum: those nearer than it need not be
+            // measured exactly (see `max_above`).
+            max_above(list.len(), to, area.max2, vertex)
+        } else {
+            measure_points(list.len(), to, vertex)
+        }
     } else {
         Partial::ZERO
     };
