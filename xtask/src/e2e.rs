@@ -19,7 +19,7 @@ use std::time::Instant;
 
 const RATIOS: [f64; 3] = [0.5, 0.1, 0.02];
 
-/// The OBJ of `id` (`bunny`, `bunny-1m`, `bunny-4m`), written once under
+/// The OBJ of `id` (`bunny`, `bunny-1m`, `bunny-4m`, `bunny-18m`), written once under
 /// `target/bench-meshes/`.
 pub(crate) fn mesh_file(id: &str) -> Result<PathBuf> {
     let bunny = crate::shared_assets()?.join("bunny.obj");
@@ -34,6 +34,7 @@ pub(crate) fn mesh_file(id: &str) -> Result<PathBuf> {
     let times = match id {
         "bunny-1m" => 2,
         "bunny-4m" => 3,
+        "bunny-18m" => 4,
         other => bail!("unknown bench mesh {other:?}"),
     };
     let scene = lodgen::io::read_scene(&bunny)?;

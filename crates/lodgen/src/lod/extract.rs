@@ -56,7 +56,7 @@ pub(super) fn extract(
     let mut remap: BTreeMap<(u32, u32, u32), u32> = BTreeMap::new();
     for (t, tri) in level.triangles.iter().enumerate() {
         let input_tri = s.triangle_map[pm.triangle_origin[t] as usize] as usize;
-        let pi = flat.prim_of_triangle[input_tri];
+        let pi = flat.prim_of_triangle(input_tri);
         for (slot, &v) in tri.iter().enumerate() {
             let src = match wedges {
                 Some(w) => w[t][slot],

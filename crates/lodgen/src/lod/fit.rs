@@ -205,7 +205,7 @@ impl FitSource {
             .collect();
         Some(FitSource {
             channels,
-            positions: flat.positions.clone(),
+            positions: flat.positions.to_vec(),
             triangles,
             values,
         })

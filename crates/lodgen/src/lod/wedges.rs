@@ -151,7 +151,15 @@ pub(super) fn simplify_wedged(
     weights: &AttributeWeights,
 ) -> Result<Simplified, MeshError> {
     let wedge = wedge_of_vertex(mesh, flat);
-    let wedged: Vec<u32> = flat.indices.iter().map(|&i| wedge[i as usize]).collect();
+    // every vertex its own wedge (a scan without attributes): the indices
+    // as they are, not a copy (peak memory)
+    let identity = wedge.iter().enumerate().all(|(v, &w)| w as usize == v);
+    let wedged: std::borrow::Cow<'_, [u32]> = if identity {
+        std::borrow::Cow::Borrowed(&flat.indices)
+    } else {
+        flat.indices.iter().map(|&i| wedge[i as usize]).collect()
+    };
+    drop(wedge);
     let (values, dims) = weighted_attributes(mesh, flat, weights);
     simplify_with_wedges(&flat.positions, &wedged, &values, dims, opts)
 }
