@@ -2,10 +2,11 @@
 //! `KHR_lights_punctual`, `name`s and `extras` of the scene, nodes, meshes,
 //! materials, textures, samplers and images, material and texture
 //! extensions (`KHR_materials_emissive_strength`, `KHR_texture_transform`,
-//! a vendor one), `extensionsUsed` / `extensionsRequired` as in the input;
+//! a vendor one), `extensionsUsed` / `extensionsRequired` as in the input,
+//! animations (a `KHR_animation_pointer` channel into a material too);
 //! TANGENT morph targets reach every level. What cannot follow a level
 //! (primitive extras and extensions, such as `KHR_materials_variants`
-//! mappings) is named in a warning. The glTF-Validator finds 0 errors in
+//! mappings; an animation pointer into mesh data) is named in a warning. The glTF-Validator finds 0 errors in
 //! the input and the output.
 
 mod support;
@@ -53,10 +54,24 @@ fn scene() -> Value {
     let dp = doc.floats(&dp, true);
     let dn = doc.floats(&vec![[0.0, 0.01, 0.0]; n], false);
     let dt = doc.floats(&vec![[0.0, 0.0, 0.01]; n], false);
+    let keys = doc.times(&[0.0, 1.0]);
+    let colors = doc.floats(&[[1.0, 1.0, 1.0, 1.0], [1.0, 0.2, 0.2, 1.0]], false);
+    let moves = doc.floats(&[[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]], false);
     let mut json = doc.json.clone();
     let extras = |what: &str| json!({"what": what, "tags": [1, 2.5, "x"], "nested": {"ok": true}});
     json["asset"] = json!({"version": "2.0", "copyright": "CC0", "extras": extras("asset")});
+    json["animations"] = json!([{
+        "name": "pulse",
+        "extras": extras("pulse"),
+        "samplers": [{"input": keys, "output": colors}, {"input": keys, "output": moves, "interpolation": "STEP"}],
+        "channels": [
+            {"sampler": 1, "target": {"node": 0, "path": "translation"}},
+            {"sampler": 0, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/materials/0/pbrMetallicRoughness/baseColorFactor"}}}}
+        ]
+    }]);
     json["extensionsUsed"] = json!([
+        "KHR_animation_pointer",
         "KHR_lights_punctual",
         "KHR_materials_emissive_strength",
         "KHR_texture_transform",
@@ -173,6 +188,12 @@ fn cameras_lights_names_extras_and_extensions_are_copied_untouched() {
     assert_eq!(got, used, "extensionsUsed: the input's and MSFT_lod");
     assert_eq!(json["asset"]["copyright"], "CC0");
     assert_eq!(json["asset"]["extras"], input_json["asset"]["extras"]);
+    // the animation: channels (a KHR_animation_pointer one too), name, extras
+    let (a, b) = (&json["animations"][0], &input_json["animations"][0]);
+    for key in ["name", "extras", "channels"] {
+        assert_eq!(a[key], b[key], "animation {key}");
+    }
+    assert_eq!(a["samplers"][1]["interpolation"], "STEP");
     // images: the data URI's PNG embedded in the GLB, the name kept
     let image = &json["images"][0];
     assert_eq!(image["name"], "checker.png");
@@ -257,4 +278,36 @@ fn what_cannot_follow_a_level_is_named_in_a_warning() {
     );
     let r = support::lodgen(&[i, "-o", o, "--levels", "50%", "-q", "--strict"]);
     assert_eq!(r.status.code(), Some(1), "{}", support::stderr(&r));
+}
+
+/// A `KHR_animation_pointer` channel into mesh data (the morph weights of
+/// mesh 0, which the levels replace) cannot follow: named in a warning; the
+/// channels into a node and a material stay.
+#[test]
+fn an_animation_pointer_into_mesh_data_is_named_in_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut input_json = scene();
+    let into_mesh = json!({"sampler": 0, "target": {"path": "pointer", "extensions":
+        {"KHR_animation_pointer": {"pointer": "/meshes/0/weights"}}}});
+    input_json["animations"][0]["channels"]
+        .as_array_mut()
+        .unwrap()
+        .push(into_mesh);
+    let input = dir.path().join("pointer.gltf");
+    std::fs::write(&input, serde_json::to_vec(&input_json).unwrap()).unwrap();
+    let out = dir.path().join("pointer.glb");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let run = support::lodgen(&[i, "-o", o, "--levels", "50%", "-q"]);
+    let stderr = support::stderr(&run);
+    assert_eq!(run.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("pointer.gltf: animations[0]: 1 channel(s) dropped"),
+        "{stderr}"
+    );
+    let json = glb_json(&out);
+    let channels = &input_json["animations"][0]["channels"].as_array().unwrap()[..2];
+    assert_eq!(
+        json["animations"][0]["channels"].as_array().unwrap(),
+        channels
+    );
 }

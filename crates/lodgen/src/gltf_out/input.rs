@@ -152,10 +152,25 @@ pub(super) fn keep_skins(
     Ok(())
 }
 
-/// Animations of node transforms are kept with their keyframe data copied
-/// into the non-LOD range; `weights` channels (the new meshes have no
-/// morph targets) and animations whose data cannot be copied as a plain
-/// dense accessor (sparse, missing) are dropped.
+/// Whether an animation channel can be kept: it targets a node (node
+/// indices are kept), or it is a `KHR_animation_pointer` into something
+/// copied as it was (a node's transform, a material, a camera, a light),
+/// not into mesh data, which is new.
+fn channel_kept(c: &Value) -> bool {
+    if c.pointer("/target/node").is_some() {
+        return true;
+    }
+    let pointer = c.pointer("/target/extensions/KHR_animation_pointer/pointer");
+    pointer.and_then(Value::as_str).is_some_and(|p| {
+        let data = ["/meshes/", "/accessors/", "/bufferViews/", "/buffers/"];
+        p.starts_with('/') && !data.iter().any(|d| p.starts_with(d)) && !p.ends_with("/weights")
+    })
+}
+
+/// Animations are kept with their keyframe data copied into the non-LOD
+/// range (`weights` channels are retargeted by `document`); channels
+/// [`channel_kept`] refuses and animations whose data cannot be copied as a
+/// plain dense accessor (sparse, missing) are dropped with a warning.
 pub(super) fn keep_animations(
     root: &mut Map<String, Value>,
     in_accessors: &[Value],
@@ -169,12 +184,13 @@ pub(super) fn keep_animations(
         let at = format!("animations[{i}]");
         if let Some(Value::Array(channels)) = animation.get_mut("channels") {
             let before = channels.len();
-            channels.retain(|c| c.pointer("/target/node").is_some());
+            channels.retain(channel_kept);
             if channels.len() < before {
                 out.warnings.push(Warning::new(
                     at.clone(),
                     format!(
-                        "{} channel(s) without a target node dropped",
+                        "{} channel(s) dropped: no target node, nor a KHR_animation_pointer \
+                         outside mesh data",
                         before - channels.len()
                     ),
                 ));

@@ -36,15 +36,41 @@ use crate::scene::{Material, MorphTarget, Origin, Primitive, Scene, SourceMesh, 
 const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization", super::meshopt_in::EXTENSION];
 
 /// Whether a required extension leaves the mesh data as the core spec reads
-/// it: material, texture and light extensions, which the writer copies
-/// untouched (and keeps required). Any other unknown required extension
+/// it: material, texture, light and animation-pointer extensions, which the
+/// writer copies untouched (and keeps required). Any other unknown required extension
 /// (`KHR_draco_mesh_compression`, a vendor's) is refused by name.
 fn passes_through(extension: &str) -> bool {
     HANDLED_EXTENSIONS.contains(&extension)
         || ["KHR_materials_", "KHR_texture_", "EXT_texture_"]
             .iter()
             .any(|p| extension.starts_with(p))
-        || extension == "KHR_lights_punctual"
+        || ["KHR_lights_punctual", "KHR_animation_pointer"].contains(&extension)
+}
+
+/// The typed document of `json` (parsed as `raw`). Animation channels
+/// without a target node (`KHR_animation_pointer`), which the `gltf` crate
+/// cannot represent, are left out of it; the writer decides about them
+/// from `raw`.
+fn typed_root(json: &[u8], raw: &serde_json::Value) -> Result<Root, serde_json::Error> {
+    let nodeless = |c: &serde_json::Value| c.pointer("/target/node").is_none();
+    let animations = raw.get("animations").and_then(serde_json::Value::as_array);
+    let has_nodeless = animations.into_iter().flatten().any(|a| {
+        let channels = a.get("channels").and_then(serde_json::Value::as_array);
+        channels.into_iter().flatten().any(nodeless)
+    });
+    if !has_nodeless {
+        return gltf::json::deserialize::from_slice(json);
+    }
+    let mut edited = raw.clone();
+    for a in edited["animations"].as_array_mut().into_iter().flatten() {
+        if let Some(channels) = a
+            .get_mut("channels")
+            .and_then(serde_json::Value::as_array_mut)
+        {
+            channels.retain(|c| !nodeless(c));
+        }
+    }
+    serde_json::from_value(edited)
 }
 
 /// Reads a `.gltf` or `.glb` from its bytes. Relative buffer URIs are
@@ -67,7 +93,16 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     } else {
         (src, None)
     };
-    let root: Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
+    // The JSON as written: what the writer copies (the typed document
+    // widens f32 numbers and drops what it has no field for), and the
+    // EXT_meshopt_compression data, which the typed document lacks
+    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| {
+        r.err(
+            Location::File,
+            ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
+        )
+    })?;
+    let root = typed_root(json, &raw).map_err(|e| {
         r.err(
             Location::File,
             ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
@@ -113,15 +148,6 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
     })?;
     let mut root = document.into_json();
     root.extensions_required = required;
-    // The JSON as written: what the writer copies (the typed document
-    // widens f32 numbers and drops what it has no field for), and the
-    // EXT_meshopt_compression data, which the typed document lacks
-    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| {
-        r.err(
-            Location::File,
-            ErrorKind::Invalid(format!("invalid glTF JSON: {e}")),
-        )
-    })?;
     let compressed = root
         .extensions_used
         .iter()
