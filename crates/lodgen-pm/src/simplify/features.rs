@@ -104,6 +104,10 @@ impl Features {
 
     /// The interior edges across which the wedges of `wedges` differ.
     pub fn seams(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> Vec<(u32, u32)> {
+        if one_wedge_per_vertex(tris, wedges) {
+            // no edge can have differing wedges: skip sorting every edge
+            return Vec::new();
+        }
         let mut half = edge_uses(tris);
         half.sort_unstable();
         let wedge_at = |t: u32, v: u32| {
@@ -169,40 +173,25 @@ impl Features {
             .copied()
             .filter(|&t| alive[t as usize])
             .collect();
-        // Sectors: union-find over the fan, joined across non-feature edges
-        // (v0, y). Fans are small: a quadratic scan is cheapest.
-        let mut comp: SmallVec<[usize; 16]> = (0..fan.len()).collect();
-        let feature = &self.nbrs[v0 as usize];
-        let mut changed = true;
-        while changed {
-            changed = false;
-            for i in 0..fan.len() {
-                for j in i + 1..fan.len() {
-                    if comp[i] == comp[j] {
-                        continue;
-                    }
-                    let (ti, tj) = (tris[fan[i] as usize], tris[fan[j] as usize]);
-                    let joined = ti
-                        .iter()
-                        .any(|&y| y != v0 && tj.contains(&y) && !feature.contains(&y));
-                    if joined {
-                        let m = comp[i].min(comp[j]);
-                        comp[i] = m;
-                        comp[j] = m;
-                        changed = true;
-                    }
-                }
+        // v1's wedge in each deleted triangle: what the corners of v0 take.
+        let mut sector_wedge: SmallVec<[(usize, u32); 2]> = fan
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| removed.contains(t))
+            .filter_map(|(i, &t)| wedge(t, v1).map(|x| (i, x)))
+            .collect();
+        // With one wedge among them every sector gets it (or, with none,
+        // the fallback below), so the sectors are only needed when they
+        // differ: the usual case without seams skips the union-find.
+        let comp = if sector_wedge.windows(2).all(|p| p[0].1 == p[1].1) {
+            SmallVec::new()
+        } else {
+            let comp = sectors(&fan, tris, v0, &self.nbrs[v0 as usize]);
+            for s in &mut sector_wedge {
+                s.0 = comp[s.0];
             }
-        }
-        // v1's wedge in each sector, from the deleted triangle(s) in it.
-        let mut sector_wedge: SmallVec<[(usize, u32); 2]> = SmallVec::new();
-        for (i, &t) in fan.iter().enumerate() {
-            if removed.contains(&t) {
-                if let Some(x) = wedge(t, v1) {
-                    sector_wedge.push((comp[i], x));
-                }
-            }
-        }
+            comp
+        };
         // A sector without a deleted triangle (a τ-pair): v1's first wedge.
         let fallback = sector_wedge.first().map(|s| s.1).or_else(|| {
             fan1.iter()
@@ -214,9 +203,9 @@ impl Features {
                 continue;
             }
             let Some(old) = wedge(t, v0) else { continue };
-            let new = sector_wedge
-                .iter()
-                .find(|s| s.0 == comp[i])
+            let new = comp
+                .get(i)
+                .and_then(|c| sector_wedge.iter().find(|s| s.0 == *c))
                 .map(|s| s.1)
                 .or(fallback)
                 .unwrap_or(old);
@@ -246,6 +235,53 @@ impl Features {
         }
         self.kind[v1 as usize] = Kind::of(self.nbrs[v1 as usize].len());
     }
+}
+
+/// Whether all corners of each vertex share one wedge (no seam anywhere:
+/// positions-only input).
+fn one_wedge_per_vertex(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> bool {
+    let nv = tris.iter().flatten().max().map_or(0, |&v| v as usize + 1);
+    let mut first: Vec<Option<u32>> = vec![None; nv];
+    for (t, w) in tris.iter().zip(wedges) {
+        for (&v, &x) in t.iter().zip(w) {
+            match &mut first[v as usize] {
+                Some(y) if *y != x => return false,
+                Some(_) => {}
+                slot => *slot = Some(x),
+            }
+        }
+    }
+    true
+}
+
+/// The sectors of `v0`'s live fan: union-find over the fan's triangles,
+/// joined across edges (v0, y) that are not feature edges (`feature`: v0's
+/// feature neighbours); each triangle's label is its sector's lowest
+/// index. Fans are small: a quadratic scan is cheapest.
+fn sectors(fan: &[u32], tris: &[[u32; 3]], v0: u32, feature: &[u32]) -> SmallVec<[usize; 16]> {
+    let mut comp: SmallVec<[usize; 16]> = (0..fan.len()).collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for i in 0..fan.len() {
+            for j in i + 1..fan.len() {
+                if comp[i] == comp[j] {
+                    continue;
+                }
+                let (ti, tj) = (tris[fan[i] as usize], tris[fan[j] as usize]);
+                let joined = ti
+                    .iter()
+                    .any(|&y| y != v0 && tj.contains(&y) && !feature.contains(&y));
+                if joined {
+                    let m = comp[i].min(comp[j]);
+                    comp[i] = m;
+                    comp[j] = m;
+                    changed = true;
+                }
+            }
+        }
+    }
+    comp
 }
 
 /// Every triangle edge as `(min, max, triangle)`.
