@@ -3,7 +3,8 @@
 //! Inputs are files, directories (walked recursively for the formats lodgen
 //! reads) and glob patterns; each output keeps its input's path relative to
 //! the directory (or the glob's fixed prefix) it was found under, with
-//! `.glb`. Files run on `--jobs` worker threads, each with its own rayon
+//! `.glb`. Files run on `--jobs` worker threads (largest input first, so no
+//! worker is left alone with a big file at the end), each with its own rayon
 //! pool of `cores / jobs` threads, so the machine is not oversubscribed;
 //! every file runs exactly the single-file build ([`cli::build_file`]), so
 //! its bytes are those of `lodgen INPUT -o OUTPUT`. A failing file (even a
@@ -492,6 +493,20 @@ pub fn threads_per_job(jobs: usize) -> usize {
     (cores / jobs.max(1)).max(1)
 }
 
+/// The order files are taken in: largest input first (ties in batch
+/// order), so with several jobs no worker is left with a big file at the
+/// end while the others idle. Results keep the batch order.
+fn largest_first(inputs: &[BatchInput]) -> Vec<usize> {
+    let size = |i: &BatchInput| std::fs::metadata(&i.input).map_or(0, |m| m.len());
+    let mut order: Vec<(std::cmp::Reverse<u64>, usize)> = inputs
+        .iter()
+        .enumerate()
+        .map(|(k, i)| (std::cmp::Reverse(size(i)), k))
+        .collect();
+    order.sort_unstable();
+    order.into_iter().map(|(_, k)| k).collect()
+}
+
 /// Run a batch: build (or skip) every input into `out_dir`, update the
 /// manifest. `on_done` is called after each file (from worker threads).
 pub fn run_batch(
@@ -521,6 +536,7 @@ pub fn run_batch(
     let options_hash = options_hash(args);
     let jobs = args.batch.jobs.max(1).min(inputs.len().max(1));
     let threads = threads_per_job(jobs);
+    let order = largest_first(inputs);
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<FileOutcome>>> = Mutex::new(vec![None; inputs.len()]);
@@ -530,10 +546,10 @@ pub fn run_batch(
             .build()
             .context("starting a worker's thread pool")?;
         loop {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            let Some(item) = inputs.get(k) else {
+            let Some(&k) = order.get(next.fetch_add(1, Ordering::Relaxed)) else {
                 return Ok(());
             };
+            let item = &inputs[k];
             let outcome = pool.install(|| one_file(item, out_dir, args, &manifest, &options_hash));
             on_done(done.fetch_add(1, Ordering::Relaxed) + 1, &outcome);
             results.lock().unwrap_or_else(|p| p.into_inner())[k] = Some(outcome);

@@ -142,15 +142,16 @@ type LevelOut<'py> = (
 
 /// `simplify(vertices, faces, argv)`: the CLI's LOD build of one mesh.
 /// Returns per level (vertices, faces, error tuple, splits), the
-/// progressive mesh the levels were cut from, and the stop note (empty
-/// when every level was reached).
+/// progressive mesh the levels were cut from, the stop note (empty
+/// when every level was reached) and whether the errors were measured
+/// (false with `--measure off`: the quadric's estimates, mean and RMS NaN).
 #[pyfunction]
 fn simplify<'py>(
     py: Python<'py>,
     vertices: PyReadonlyArray2<'py, f32>,
     faces: PyReadonlyArray2<'py, i64>,
     argv: Vec<String>,
-) -> PyResult<(Vec<LevelOut<'py>>, PyProgressiveMesh, String)> {
+) -> PyResult<(Vec<LevelOut<'py>>, PyProgressiveMesh, String, bool)> {
     let args = parse(argv)?;
     let (positions, indices) = mesh_in(&vertices, &faces)?;
     let scene = Scene {
@@ -204,6 +205,7 @@ fn simplify<'py>(
     } else {
         cli::stop_note(st.stop, &st.stats)
     };
+    let measured = build.measured;
     let simplified = build.simplified;
     Ok((
         levels,
@@ -213,6 +215,7 @@ fn simplify<'py>(
             simplified.triangle_map,
         ),
         note,
+        measured,
     ))
 }
 

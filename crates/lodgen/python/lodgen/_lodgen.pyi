@@ -59,6 +59,7 @@ def simplify(
     List[Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32], _ErrorTuple, int]],
     ProgressiveMesh,
     str,
+    bool,
 ]: ...
 def progressive(
     vertices: npt.NDArray[np.float32],

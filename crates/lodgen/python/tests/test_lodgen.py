@@ -227,3 +227,15 @@ def test_read_gives_the_arrays_the_command_reads(tmp_path):
     assert triangle_set(rv, rf) == triangle_set(v, f)
     with pytest.raises(lodgen.LodgenError, match=r"reading .*missing\.obj"):
         lodgen.read(tmp_path / "missing.obj")
+
+
+def test_measure_off_keeps_the_levels_and_says_so():
+    v, f = torus()
+    on = lodgen.simplify(v, f, levels=[0.1])
+    off = lodgen.simplify(v, f, levels=[0.1], measure=False)
+    assert on.measured and not off.measured
+    np.testing.assert_array_equal(on.levels[0].faces, off.levels[0].faces)
+    np.testing.assert_array_equal(on.levels[0].vertices, off.levels[0].vertices)
+    assert np.isnan(off.levels[0].errors.rms) and not np.isnan(on.levels[0].errors.rms)
+    assert off.levels[0].errors.hausdorff > 0
+    assert not lodgen.simplify(v, f, levels=[0.1], measure="off").measured
