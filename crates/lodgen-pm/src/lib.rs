@@ -51,9 +51,9 @@ pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use progressive::{attrfit, levels, stream};
 pub use progressive::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 pub use simplify::{
-    Boundary, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier, SimplifyOptions,
-    Snapshot, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES,
-    DEFAULT_PASS_FACTOR,
+    Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
+    SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT,
+    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
 };
 
 /// A simplification's result: the progressive mesh (numbered as in
@@ -116,6 +116,23 @@ pub fn simplify_with_wedges(
     dims: usize,
     opts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
+    simplify_with_wedges_metered(positions, indices, attributes, dims, opts, None)
+}
+
+/// [`simplify_with_wedges`], reporting its stage and the share of the
+/// target reached to `meter` (read it from another thread for a progress
+/// display; [`Meter`]).
+pub fn simplify_with_wedges_metered(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
+    opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
+) -> Result<Simplified, MeshError> {
+    if let Some(m) = &meter {
+        m.set_stage(Stage::Preparing);
+    }
     if attributes.len() != dims * positions.len() {
         return Err(MeshError::AttributeCount {
             len: attributes.len(),
@@ -141,6 +158,9 @@ pub fn simplify_with_wedges(
             .map(|&x| if x.is_finite() { x } else { 0.0 })
             .collect();
         s.set_attributes(values, dims);
+    }
+    if let Some(m) = meter {
+        s.set_meter(m);
     }
     let stop = s.run();
     let (pm, stats) = s.finish();

@@ -37,6 +37,7 @@ mod cost;
 pub(crate) mod features;
 pub(crate) mod heap;
 pub(crate) mod legality;
+mod meter;
 mod options;
 pub(crate) mod pairs;
 mod partition;
@@ -48,6 +49,7 @@ pub(crate) mod stats;
 mod walk;
 
 pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
+pub use meter::{Meter, Stage};
 pub use options::{
     Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
     DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
@@ -63,6 +65,7 @@ use crate::simplify::quadric::Quadric;
 use glam::DVec3;
 use smallvec::SmallVec;
 use std::cmp::Ordering;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A heap entry: a pair's cost, stamped with both vertices' versions. It is
@@ -145,6 +148,8 @@ pub struct Simplifier {
     features: Option<Features>,
     /// Attribute term of the heap key, when set (`set_attributes`).
     attributes: Option<AttributeCost>,
+    /// Where `run` reports its progress, when set (`set_meter`).
+    meter: Option<Arc<Meter>>,
 }
 
 /// A contraction that passed [`Simplifier::check`]: `v0` goes into `v1`,
@@ -306,6 +311,12 @@ impl Simplifier {
         self.rebuild_heap();
     }
 
+    /// Report progress to `meter` (stage, share of the target reached)
+    /// from `run` on, for an observer on another thread.
+    pub fn set_meter(&mut self, meter: Arc<Meter>) {
+        self.meter = Some(meter);
+    }
+
     /// Live triangles now.
     pub fn triangle_count(&self) -> usize {
         self.live_tris
@@ -339,11 +350,18 @@ impl Simplifier {
         }
         let batched = matches!(self.opts.schedule, Schedule::Passes { .. })
             && rayon::current_num_threads() > 1;
+        let meter = self.meter.clone();
+        if let Some(m) = &meter {
+            m.begin(self.live_tris, self.target);
+        }
         let mut walk = || loop {
             let step = match self.opts.schedule {
                 Schedule::Passes { factor } if batched => self.walk_batch(factor),
                 _ => self.step_inner(),
             };
+            if let Some(m) = &meter {
+                m.set_live(self.live_tris);
+            }
             if let Err(r) = step {
                 break r;
             }
@@ -373,6 +391,9 @@ impl Simplifier {
     /// Turn the log into the progressive mesh.
     pub fn finish(mut self) -> (ProgressiveMesh, Stats) {
         let t0 = Instant::now();
+        if let Some(m) = &self.meter {
+            m.set_stage(Stage::Finishing);
+        }
         // free what the log's renumbering does not read before it
         // allocates the progressive mesh (peak memory)
         self.pass = Pass::default();
@@ -395,6 +416,9 @@ impl Simplifier {
         self.stats.output_triangles = self.live_tris;
         self.stats.output_vertices = pm.base.positions.len();
         self.stats.time.log = t0.elapsed();
+        if let Some(m) = &self.meter {
+            m.set_stage(Stage::Idle);
+        }
         (pm, self.stats)
     }
 }

@@ -255,6 +255,7 @@ impl Simplifier {
                 .map(|s| verts.iter().map(|g| s[get(g)]).collect()),
             features: None,
             attributes: None,
+            meter: None,
         }
     }
 

@@ -75,6 +75,7 @@ impl Simplifier {
             cost_scale: None,
             features: None,
             attributes: None,
+            meter: None,
         };
         if opts.boundary == Boundary::Locked {
             for v in 0..nv {

@@ -379,6 +379,7 @@ impl BuildArgs {
             measured: self.measure == MeasureMode::On,
             attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
             min_triangles: self.min_triangles,
+            meter: None,
         })
     }
 

@@ -2,9 +2,11 @@
 //! file, timed, without printing. [`BuiltFile`] is what it made.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
+use lodgen_pm::Meter;
 
 use crate::gltf_out;
 use crate::io;
@@ -46,7 +48,20 @@ pub fn build_file(
     args: &BuildArgs,
     on_progress: &mut dyn FnMut(Progress),
 ) -> Result<BuiltFile> {
-    let opts = args.build_options()?;
+    build_file_metered(input, output, args, on_progress, None)
+}
+
+/// [`build_file`], each QEM simplification reporting to `meter`
+/// ([`crate::lod::BuildOptions::meter`]) for a progress display.
+pub fn build_file_metered(
+    input: &Path,
+    output: &Path,
+    args: &BuildArgs,
+    on_progress: &mut dyn FnMut(Progress),
+    meter: Option<Arc<Meter>>,
+) -> Result<BuiltFile> {
+    let mut opts = args.build_options()?;
+    opts.meter = meter;
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }

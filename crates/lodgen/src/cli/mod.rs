@@ -8,7 +8,8 @@
 //!
 //! # Files
 //! `args` (clap arguments → options) → `job` (`build_file`: read → LODs →
-//! write, timed) → `output` (spinner, tables, `--report`); `measure`
+//! write, timed) → `output` (tables, `--report`), `progress` (the progress
+//! line: build events and the simplification's `Meter`, polled); `measure`
 //! (`lodgen measure`), `golden` (golden summaries).
 
 mod args;
@@ -16,12 +17,13 @@ mod golden;
 pub(crate) mod job;
 mod measure;
 mod output;
+mod progress;
 
 pub use args::{
     default_output, parse_attribute_weights, parse_levels, parse_max_errors, parse_tau,
     BoundaryMode, BuildArgs, CompressMode, MeasureMode, PlacementMode, ScheduleMode,
 };
 pub use golden::golden_summary;
-pub use job::{build_file, BuiltFile, FileTimes};
+pub use job::{build_file, build_file_metered, BuiltFile, FileTimes};
 pub use measure::{measure_files, measure_report, merged_mesh};
 pub use output::{build, stop_note, table, write_atomically};

@@ -3,17 +3,19 @@
 //! its atomic write.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use serde_json::json;
 
-use crate::lod::{MeshBuild, Progress};
+use crate::lod::MeshBuild;
 use crate::scene::Scene;
 use crate::summary;
 
 use super::args::{default_output, BuildArgs};
-use super::job::{build_file, BuiltFile};
+use super::job::{build_file, build_file_metered, BuiltFile};
+use super::progress::Spinner;
 
 impl BuiltFile {
     /// The JSON `--report` of this file.
@@ -37,41 +39,11 @@ impl BuiltFile {
 pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usize> {
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     let t0 = Instant::now();
-    let bar = show_progress.then(|| {
-        let b = indicatif::ProgressBar::new_spinner();
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {elapsed:>3} {msg}") {
-            b.set_style(style);
-        }
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        b
-    });
-    // Phase start, for the measuring ETA (levels take similar times).
-    let mut phase_start = Instant::now();
-    let mut on_progress = |p: Progress| {
-        let Some(b) = &bar else { return };
-        let msg = match p {
-            Progress::Reading => format!("reading {}", input.display()),
-            Progress::Writing => format!("writing {}", output.display()),
-            Progress::Simplifying { mesh, of } => format!("simplifying mesh {}/{of}", mesh + 1),
-            Progress::Measuring { mesh, level, of } => {
-                if level == 0 {
-                    phase_start = Instant::now();
-                }
-                let eta = if level > 0 {
-                    let per = phase_start.elapsed().as_secs_f64() / level as f64;
-                    format!(", about {:.0} s left", per * (of - level) as f64)
-                } else {
-                    String::new()
-                };
-                format!("mesh {}: measuring level {}/{of}{eta}", mesh + 1, level + 1)
-            }
-        };
-        b.set_message(msg);
+    let built = if show_progress {
+        with_spinner(input, &output, args)?
+    } else {
+        build_file(input, &output, args, &mut |_| {})?
     };
-    let built = build_file(input, &output, args, &mut on_progress)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
     let elapsed = t0.elapsed();
     let BuiltFile {
         builds,
@@ -98,6 +70,24 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usiz
         eprintln!("warning: {}: {w}", input.display());
     }
     Ok(built.warnings.len())
+}
+
+/// [`build_file`] with the progress line on stderr: build events set it,
+/// and a second thread polls the simplification's meter.
+fn with_spinner(input: &Path, output: &Path, args: &BuildArgs) -> Result<BuiltFile> {
+    let spinner = Spinner::new();
+    let meter = Some(Arc::clone(&spinner.meter));
+    let built = std::thread::scope(|scope| {
+        scope.spawn(|| spinner.poll());
+        let mut on_progress = |p| spinner.on_progress(p, input, output);
+        let built = build_file_metered(input, output, args, &mut on_progress, meter);
+        spinner
+            .done
+            .store(true, std::sync::atomic::Ordering::Relaxed);
+        built
+    });
+    spinner.finish();
+    built
 }
 
 /// Why a simplification stopped short of its target, in words: where it

@@ -228,7 +228,12 @@ fn simplify(
     sopts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
     if opts.method == Method::Qem {
-        simplify_wedged(mesh, flat, sopts, &opts.attribute_weights)
+        let meter = opts.meter.clone();
+        let r = simplify_wedged(mesh, flat, sopts, &opts.attribute_weights, meter);
+        if let Some(m) = &opts.meter {
+            m.set_stage(lodgen_pm::Stage::Idle);
+        }
+        r
     } else {
         simplify_adaptive(
             &flat.positions,

@@ -36,6 +36,10 @@ pub struct BuildOptions {
     /// than 1), so a mesh with at most this many is written unsimplified.
     /// Default value: [`DEFAULT_MIN_TRIANGLES`].
     pub min_triangles: usize,
+    /// Where the QEM simplification reports its stage and the share of its
+    /// target reached, for a progress display on another thread (`None`:
+    /// not reported).
+    pub meter: Option<std::sync::Arc<lodgen_pm::Meter>>,
 }
 
 /// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
@@ -96,6 +100,7 @@ impl Default for BuildOptions {
             measured: true,
             attribute_weights: AttributeWeights::DEFAULT,
             min_triangles: DEFAULT_MIN_TRIANGLES,
+            meter: None,
         }
     }
 }

@@ -2,7 +2,9 @@
 //! wedge (same primitive, position and attribute bits), the weighted
 //! attribute vector per flat vertex, and QEM run on wedges.
 
-use lodgen_pm::{simplify_with_wedges, MeshError, Simplified, SimplifyOptions};
+use std::sync::Arc;
+
+use lodgen_pm::{simplify_with_wedges_metered, MeshError, Meter, Simplified, SimplifyOptions};
 
 use crate::scene::{Primitive, SourceMesh};
 
@@ -141,7 +143,7 @@ pub fn simplify_mesh(
     opts: &SimplifyOptions,
     weights: &AttributeWeights,
 ) -> Result<Simplified, MeshError> {
-    simplify_wedged(mesh, &flatten(mesh), opts, weights)
+    simplify_wedged(mesh, &flatten(mesh), opts, weights, None)
 }
 
 pub(super) fn simplify_wedged(
@@ -149,6 +151,7 @@ pub(super) fn simplify_wedged(
     flat: &Flat,
     opts: &SimplifyOptions,
     weights: &AttributeWeights,
+    meter: Option<Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
     let wedge = wedge_of_vertex(mesh, flat);
     // every vertex its own wedge (a scan without attributes): the indices
@@ -161,5 +164,5 @@ pub(super) fn simplify_wedged(
     };
     drop(wedge);
     let (values, dims) = weighted_attributes(mesh, flat, weights);
-    simplify_with_wedges(&flat.positions, &wedged, &values, dims, opts)
+    simplify_with_wedges_metered(&flat.positions, &wedged, &values, dims, opts, meter)
 }
