@@ -1,7 +1,9 @@
 //! `cargo xtask fuzz [--cases N] [--seed S]`: structure-aware mutations of
 //! valid files of every input format (`lodgen::fuzz::seeds`: OBJ, ASCII and
 //! binary PLY, SMF, GLB plain, quantized + meshopt-compressed, and with a
-//! `LODGEN_progressive` stream written at run time), each run in-process
+//! `LODGEN_progressive` stream written at run time, and a glTF scene with
+//! morph targets, a skin, animations, a camera, a light and material
+//! extensions), each run in-process
 //! through `lodgen::fuzz::run_case` (inspect and stream decode + replay of
 //! GLB input, read, measure, build, write, inspect, read back) with a
 //! timeout. Cases and shrinking come from proptest's

@@ -10,6 +10,8 @@
 //! mutations; only a panic or a hang is a defect, and the callers check for
 //! those (`catch_unwind`, a timeout per case).
 
+mod scene;
+
 use std::path::Path;
 
 use clap::Parser;
@@ -21,7 +23,7 @@ use lodgen_pm::levels::LevelSpec;
 
 /// A valid input file: its extension (which picks the reader) and bytes.
 pub struct Seed {
-    /// File extension without the dot: `obj`, `ply`, `smf`, `glb`.
+    /// File extension without the dot: `obj`, `ply`, `smf`, `gltf`, `glb`.
     pub ext: &'static str,
     /// What the seed is, for messages.
     pub name: &'static str,
@@ -34,7 +36,9 @@ pub struct Seed {
 
 /// A small torus (96 triangles) in every input format: OBJ with normals and
 /// UVs and two objects, ASCII and binary PLY, SMF, and GLB as lodgen writes
-/// it plain and quantized + meshopt-compressed (written into `dir`).
+/// it plain and quantized + meshopt-compressed (written into `dir`); and a
+/// glTF scene with morph targets, a skin, an animation, a camera, a light
+/// and material extensions (`scene.rs`).
 pub fn seeds(dir: &Path) -> Result<Vec<Seed>, String> {
     let m = lodgen_pm::shapes::torus(1.0, 0.4, 8, 6);
     let (p, t) = (&m.positions, &m.triangles);
@@ -136,6 +140,12 @@ pub fn seeds(dir: &Path) -> Result<Vec<Seed>, String> {
             focus: None,
         });
     }
+    seeds.push(Seed {
+        ext: "gltf",
+        name: "gltf-scene",
+        bytes: scene::scene_gltf(),
+        focus: None,
+    });
     let (bytes, focus) = progressive_seed(&obj_path, dir)?;
     seeds.push(Seed {
         ext: "glb",
