@@ -227,6 +227,10 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     let quick = args.iter().any(|a| a == "--quick");
     let exe = std::env::current_exe()?;
+    let huge = args.iter().any(|a| a == "--huge");
+    if args.iter().any(|a| a == "--e2e") {
+        return crate::e2e::run(&exe, quick, huge);
+    }
     println!("lodgen vs meshopt (meshoptimizer 1.3), symmetric errors by lodgen's metric, % of bbox diagonal");
     println!("time: lodgen = one pass to 2% yielding 50/10/2%; meshopt = its single call to 2%\n");
     println!(
@@ -296,6 +300,6 @@ pub fn run(args: &[String]) -> Result<()> {
             );
         }
     }
-    crate::e2e::run(&exe, quick)?;
+    crate::e2e::run(&exe, quick, huge)?;
     Ok(())
 }

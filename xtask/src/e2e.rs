@@ -2,7 +2,8 @@
 //! meshoptimizer program doing the same job (read the OBJ, three `simplify`
 //! calls to 50 / 10 / 2 % of the input, write the levels), each a process of
 //! its own, alternating run by run, on the bunny and the bunny subdivided
-//! twice (1.1 M triangles) and three times (4.4 M; not with `--quick`). Wall
+//! twice (1.1 M triangles) and three times (4.4 M; not with `--quick`; with
+//! `--huge` also four times, 17.8 M). Wall
 //! time and peak resident memory come from the child's `getrusage`; errors
 //! (symmetric Hausdorff and RMS at 2 %, lodgen's metric, % of the diagonal)
 //! from lodgen's `--report` and from measuring meshoptimizer's 2 % level.
@@ -184,8 +185,9 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// The end-to-end table.
-pub fn run(exe: &Path, quick: bool) -> Result<()> {
+/// The end-to-end table; `huge` adds the bunny subdivided four times
+/// (17.8 M triangles, one run).
+pub fn run(exe: &Path, quick: bool, huge: bool) -> Result<()> {
     let lodgen = exe.with_file_name("lodgen");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
@@ -194,10 +196,15 @@ pub fn run(exe: &Path, quick: bool) -> Result<()> {
         .status()?;
     anyhow::ensure!(status.success(), "building lodgen failed");
     let tmp = tempfile_dir()?;
-    let meshes: &[(&str, usize)] = if quick {
-        &[("bunny", 3)]
-    } else {
-        &[("bunny", 5), ("bunny-1m", 3), ("bunny-4m", 1)]
+    let meshes: &[(&str, usize)] = match (quick, huge) {
+        (true, _) => &[("bunny", 3)],
+        (false, false) => &[("bunny", 5), ("bunny-1m", 3), ("bunny-4m", 1)],
+        (false, true) => &[
+            ("bunny", 5),
+            ("bunny-1m", 3),
+            ("bunny-4m", 1),
+            ("bunny-18m", 1),
+        ],
     };
     println!("\nend to end (whole process: read, 50/10/2 %, measure (lodgen only), write), alternating run by run");
     println!(

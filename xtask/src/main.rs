@@ -25,8 +25,10 @@ tasks:
                           mutated OBJ/PLY/SMF/GLB files through read, build, write, inspect (default 2000 cases, seed 1);
                           a failing case is stored in tests/fuzz-regressions/
   golden                  regenerate assets/golden/ (bunny and cow LOD summaries) and assets/knot.obj
-  bench [--quick]         lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
-                          then end to end (the lodgen binary vs a meshopt program; + 4.4M)
+  bench [--quick] [--e2e] [--huge]
+                          lodgen vs meshopt on the bunny and a ~1M-triangle subdivided bunny,
+                          then end to end (the lodgen binary vs a meshopt program; + 4.4M);
+                          --e2e: the end-to-end rows only; --huge: + the 17.8M mesh (one run)
   bench --python [--batch] [--quick]
                           lodgen.simplify from Python vs the same call in Rust, pyfqmr, fast-simplification
                           (bunny to 2 %, venv target/bench-venv or $LODGEN_PYTHON); --batch: --jobs 2 / --jobs 1
