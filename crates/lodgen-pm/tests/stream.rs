@@ -6,8 +6,8 @@
 mod common;
 use lodgen_pm::shapes::{cube, grid, icosphere, torus_knot};
 use lodgen_pm::stream::{
-    decode, decode_header, decode_with_attributes, encode, encode_with_attributes, Channel,
-    EncodeError, EncodeOptions, Grid, StreamDecoder, StreamError, WedgeAttributes,
+    decode, decode_header, decode_with_attributes, encode, encode_with_attributes, AttrEncoding,
+    Channel, EncodeError, EncodeOptions, Grid, StreamDecoder, StreamError, WedgeAttributes,
 };
 use lodgen_pm::{simplify, simplify_with_wedges, Mesh, ProgressiveMesh, SimplifyOptions, Tau};
 use proptest::prelude::*;
@@ -356,7 +356,7 @@ fn charted_sphere(subdivisions: u32, grouped: bool) -> (Vec<[f32; 3]>, Vec<u32>,
                 pos.push(p);
                 values.extend_from_slice(&[p[0] / n, p[1] / n, p[2] / n]);
                 values.extend_from_slice(&[
-                    0.25 * chart as f32 + 0.1 * p[0],
+                    0.1 * chart as f32 + 0.05 * p[0] + 0.05,
                     0.5 + 0.3 * p[1] - 0.2 * p[2],
                 ]);
                 groups.push(if grouped { chart % 2 } else { 0 });
@@ -398,6 +398,26 @@ fn wedged(subdivisions: u32, grouped: bool, target: usize) -> (ProgressiveMesh, 
     (pm, attrs)
 }
 
+/// `a` with every value through its channel's encoding (what a stream
+/// with those encodings carries).
+fn round_tripped(a: &WedgeAttributes, encodings: &[AttrEncoding]) -> WedgeAttributes {
+    let stride = a.stride();
+    let mut lanes = Vec::new();
+    for (c, e) in a.channels.iter().zip(encodings) {
+        lanes.extend(std::iter::repeat_n(*e, usize::from(c.components)));
+    }
+    let values = a
+        .values
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| lanes[i % stride].round_trip(x))
+        .collect();
+    WedgeAttributes {
+        values,
+        ..a.clone()
+    }
+}
+
 /// Every corner of `a` (log numbering, values in `va`) and `b` (stream
 /// numbering, values in `vb`) has bit-identical attribute values and group.
 fn assert_same_corner_values(
@@ -424,17 +444,28 @@ fn assert_same_corner_values(
 
 #[test]
 fn wedged_stream_replays_every_corner_attribute_exactly() {
-    for grouped in [false, true] {
+    for (grouped, exact) in [(false, false), (true, false), (false, true)] {
         let (pm, attrs) = wedged(3, grouped, 24);
         assert!(pm.len() > 200);
         let levels = [pm.len(), pm.len() / 3, 0];
-        let bytes = encode_with_attributes(&pm, &levels, EncodeOptions::DEFAULT, &attrs).unwrap();
+        let opts = EncodeOptions::DEFAULT.with_exact_attributes(exact);
+        let bytes = encode_with_attributes(&pm, &levels, opts, &attrs).unwrap();
         let plain = encode(&pm, &levels, EncodeOptions::DEFAULT);
         assert!(bytes.len() > plain.len());
         let h = decode_header(&bytes).unwrap();
         let layout = h.wedges.expect("wedge table");
         assert_eq!(layout.channels, attrs.channels);
         assert_eq!(layout.groups, if grouped { 2 } else { 1 });
+        // normals as snorm8 and UVs (all in [0, 1]) as unorm16, as
+        // `--quantize` writes them; or exact f32
+        let want = if exact {
+            vec![AttrEncoding::F32; 2]
+        } else {
+            vec![AttrEncoding::Snorm8, AttrEncoding::Unorm16]
+        };
+        assert_eq!(layout.encodings, want);
+        let expected = round_tripped(&attrs, &want);
+        assert_eq!(exact, expected == attrs);
         let dec = decode_with_attributes(&bytes).unwrap();
         assert_eq!(dec.levels, levels);
         let got = dec.attributes.as_ref().expect("attributes decoded");
@@ -444,7 +475,11 @@ fn wedged_stream_replays_every_corner_attribute_exactly() {
         let (mut a, mut d) = (pm.cursor(), dec.pm.cursor());
         for k in 0..=pm.len() {
             assert_eq!(a.mesh().triangles, d.mesh().triangles, "k = {k}");
-            assert_same_corner_values(k, (a.wedges().unwrap(), &attrs), (d.wedges().unwrap(), got));
+            assert_same_corner_values(
+                k,
+                (a.wedges().unwrap(), &expected),
+                (d.wedges().unwrap(), got),
+            );
             a.refine(1);
             d.refine(1);
         }
@@ -452,7 +487,11 @@ fn wedged_stream_replays_every_corner_attribute_exactly() {
         for k in (0..=pm.len()).rev().step_by(5) {
             a.seek(k);
             d.seek(k);
-            assert_same_corner_values(k, (a.wedges().unwrap(), &attrs), (d.wedges().unwrap(), got));
+            assert_same_corner_values(
+                k,
+                (a.wedges().unwrap(), &expected),
+                (d.wedges().unwrap(), got),
+            );
         }
     }
 }
@@ -471,6 +510,8 @@ fn fully_refined_stream_has_the_input_attributes_at_every_corner() {
     let bytes = encode_with_attributes(&out.pm, &[0], EncodeOptions::DEFAULT, &attrs).unwrap();
     let dec = decode_with_attributes(&bytes).unwrap();
     let got = dec.attributes.as_ref().unwrap();
+    let encodings = decode_header(&bytes).unwrap().wedges.unwrap().encodings;
+    let attrs = round_tripped(&attrs, &encodings);
     // topology is exact: the in-memory full mesh has the decoded triangles,
     // with unquantized positions to find each input corner by
     let fine = out.pm.mesh_at_splits(out.pm.len());
@@ -508,6 +549,8 @@ fn incremental_wedged_decoding_shows_each_step() {
     let bytes =
         encode_with_attributes(&pm, &[pm.len(), 0], EncodeOptions::DEFAULT, &attrs).unwrap();
     let whole = decode_with_attributes(&bytes).unwrap();
+    let encodings = decode_header(&bytes).unwrap().wedges.unwrap().encodings;
+    let attrs = round_tripped(&attrs, &encodings);
     for chunk in [1, 3, 64, bytes.len()] {
         let mut d = StreamDecoder::new();
         let mut a = pm.cursor();

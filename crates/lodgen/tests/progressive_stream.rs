@@ -88,3 +88,103 @@ fn every_level_of_a_quantized_file_replays_exactly_from_its_stream() {
         }
     }
 }
+
+/// spot.obj (UVs): every corner of the finest level replayed from the
+/// stream has the file level's grid point and texture coordinate (through
+/// the channel's encoding: spot's UVs leave [0, 1], so exact `f32`, as
+/// `--quantize` keeps them), and every level the file's triangles.
+#[test]
+fn the_finest_level_of_a_textured_file_replays_its_attributes_exactly() {
+    let Some(spot) = lodgen::assets::shared_asset("spot.obj") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("spot.glb");
+    let argv = [
+        "lodgen",
+        "--levels",
+        "100%,50%,10%,2%",
+        "--progressive",
+        "--quantize",
+        "--compress",
+        "meshopt",
+    ];
+    let args = Options::try_parse_from(argv).unwrap().build;
+    let built = build_file(&spot, &out, &args, &mut |_| {}).unwrap();
+    let mb = &built.builds[0];
+    let grid: Grid = lodgen::progressive::level_grid(&mb.lod);
+    let (_, stream) = lodgen::progressive::read_file(&out).unwrap().unwrap();
+    let layout = lodgen_pm::stream::decode_header(&stream)
+        .unwrap()
+        .wedges
+        .expect("spot streams its wedges");
+    let (uv, n) = {
+        let d = lodgen_pm::stream::decode_with_attributes(&stream).unwrap();
+        let a = d.attributes.clone().unwrap();
+        let (at, n) = a.channel("TEXCOORD_0").expect("a UV channel");
+        assert_eq!(n, 2);
+        let enc = layout.encodings[layout
+            .channels
+            .iter()
+            .position(|c| c.name == "TEXCOORD_0")
+            .unwrap()];
+        assert_eq!(enc, lodgen_pm::stream::AttrEncoding::F32);
+        ((d, a, at, enc), n)
+    };
+    let (d, a, at, enc) = uv;
+    let mut cursor = d.pm.cursor();
+    for (k, level) in mb.lod.levels.iter().enumerate() {
+        cursor.seek(d.levels[k]);
+        let m = cursor.mesh();
+        let w = cursor.wedges().unwrap();
+        // corners as (grid point, UV bits); the UV only on the finest level
+        // (coarser file levels hold fitted values, the stream source ones)
+        let with_uv = k == 0;
+        let corner = |q: [u16; 3], uv: [f32; 2]| {
+            let uv = if with_uv {
+                uv.map(|x| enc.round_trip(x).to_bits())
+            } else {
+                [0; 2]
+            };
+            (q, uv)
+        };
+        let mut got: Vec<_> = m
+            .triangles
+            .iter()
+            .zip(w)
+            .map(|(t, tw)| {
+                let c: [_; 3] = [0, 1, 2].map(|i| {
+                    let v = a.wedge(tw[i]);
+                    corner(
+                        grid.quantize(m.positions[t[i] as usize]),
+                        [v[at], v[at + n - 1]],
+                    )
+                });
+                rotate(c)
+            })
+            .collect();
+        let mut want: Vec<_> = level
+            .primitives
+            .iter()
+            .flat_map(|p| {
+                let uvs = p.texcoords.as_ref().expect("the level has UVs");
+                p.indices.chunks_exact(3).map(move |t| {
+                    rotate([0, 1, 2].map(|i| {
+                        let v = t[i] as usize;
+                        corner(grid.quantize(p.positions[v]), uvs[v])
+                    }))
+                })
+            })
+            .collect();
+        got.sort_unstable();
+        want.sort_unstable();
+        assert_eq!(got.len(), want.len(), "level {k}: triangle count");
+        assert!(got == want, "level {k}: corners differ");
+    }
+}
+
+/// A triangle rotated to start at its smallest corner (orientation kept).
+fn rotate<T: Ord + Copy>(t: [T; 3]) -> [T; 3] {
+    let r = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+    [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+}

@@ -1,4 +1,4 @@
-// LODGEN_progressive stream decoder (layout version 2, docs/LODGEN_progressive.md),
+// LODGEN_progressive stream decoder (layout version 3, docs/LODGEN_progressive.md),
 // a second, independent implementation of crates/lodgen-pm/src/progressive/stream/.
 // Used by the `lodgen view` page (viewer.js) and the three.js loader
 // (three/index.js). The columns are decoded by meshoptimizer's
@@ -16,6 +16,12 @@
 // are plain arrays.
 
 const FACE_ESCAPE = 255;
+const NONE = 0xffffffff;
+// attribute encodings: 0 f32, 1 unorm16, 2 snorm8, 3 unorm8
+const ENC_MAX = [0, 65535, 254, 255];
+function dequantize(e, q) {
+  return Math.fround(e === 1 ? q / 65535 : e === 2 ? (q - 127) / 127 : q / 255);
+}
 const RING_CODES = 42;
 const PERMS = [[0, 1, 2], [1, 2, 0], [2, 0, 1], [1, 0, 2], [0, 2, 1], [2, 1, 0]];
 
@@ -63,7 +69,7 @@ export function parseHeader(bytes) {
   const r = new Bytes(bytes, 0, 0);
   for (const m of [0x4c, 0x47, 0x50, 0x4d]) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
   const version = r.byte();
-  if (version !== 2) throw new Error(`unsupported stream version ${version}`);
+  if (version !== 3) throw new Error(`unsupported stream version ${version}`);
   const flags = r.byte();
   if (flags & ~3) throw new Error(`unknown flags ${flags}`);
   const bits = r.byte();
@@ -103,7 +109,16 @@ export function parseHeader(bytes) {
       channels.push({ name, components, offset: stride });
       stride += components;
     }
-    h.wedges = { total, groups, channels, stride };
+    // per channel its encoding, and its lanes among the quantized (qlane)
+    // or the f32 (flane) values of a wedge
+    let qstride = 0, fstride = 0;
+    for (const c of channels) {
+      c.encoding = r.byte();
+      if (c.encoding > 3) throw new Error(`unknown attribute encoding ${c.encoding}`);
+      if (c.encoding === 0) { c.flane = fstride; fstride += c.components; }
+      else { c.qlane = qstride; qstride += c.components; c.padded = c.components + (c.components & 1); }
+    }
+    h.wedges = { total, groups, channels, stride, qstride, fstride };
   }
   const nc = r.bounded(65536, "chunk count");
   if (nc === 0) throw new Error("no chunks");
@@ -217,16 +232,27 @@ function differences(sums) {
   return out;
 }
 
-// The wings of a split (third vertices of its first two faces holding v0 and v1).
-function wings(faces, v0, v1) {
-  const xs = [];
+// The wing faces of a split: indices (in faces / 3) of its first two faces
+// holding v0, v1 and exactly one other corner, when their third vertices differ.
+function wingFaces(faces, v0, v1) {
+  const xs = [], is = [];
   for (let f = 0; f < faces.length && xs.length < 2; f += 3) {
-    const t = [faces[f], faces[f + 1], faces[f + 2]];
-    if (!t.includes(v0) || !t.includes(v1)) continue;
-    const others = t.filter((c) => c !== v0 && c !== v1);
-    if (others.length === 1) xs.push(others[0]);
+    const a = faces[f], b = faces[f + 1], c = faces[f + 2];
+    if ((a !== v0 && b !== v0 && c !== v0) || (a !== v1 && b !== v1 && c !== v1)) continue;
+    let n = 0, x = -1;
+    if (a !== v0 && a !== v1) { n++; x = a; }
+    if (b !== v0 && b !== v1) { n++; x = b; }
+    if (c !== v0 && c !== v1) { n++; x = c; }
+    if (n === 1) { xs.push(x); is.push(f / 3); }
   }
-  return xs.length === 2 && xs[0] !== xs[1] ? xs : null;
+  return xs.length === 2 && xs[0] !== xs[1] ? is : null;
+}
+
+function wings(faces, v0, v1) {
+  const w = wingFaces(faces, v0, v1);
+  if (!w) return null;
+  const third = (k) => { for (let j = 0; j < 3; j++) { const x = faces[3 * k + j]; if (x !== v0 && x !== v1) return x; } return -1; };
+  return [third(w[0]), third(w[1])];
 }
 
 export class StreamDecoder {
@@ -310,12 +336,23 @@ export class StreamDecoder {
     for (let v = 0; v < nv; v++) this.fans.push([]);
     for (let t = 0; t < this.nt; t++) this.addFan(t);
     if (h.wedges) {
-      this.wvals = new Float32Array(h.wedges.total * h.wedges.stride);
-      this.wgroups = new Uint32Array(h.wedges.total);
+      const w = h.wedges;
+      this.wvals = new Float32Array(w.total * w.stride);
+      this.wvalsBits = new Uint32Array(this.wvals.buffer);
+      this.wgroups = new Uint32Array(w.total);
+      this.qv = new Uint16Array(w.total * w.qstride);
+      this.fv = new Float32Array(w.total * w.fstride);
+      this.fvBits = new Uint32Array(this.fv.buffer);
+      this.qpred = new Uint16Array(w.qstride);
+      this.fpred = new Uint32Array(w.fstride);
+      this.f32 = new Float32Array(1);
+      this.f32Bits = new Uint32Array(this.f32.buffer);
+      this.cand = [];
       this.nw = 0;
       this.cw = new Uint32Array(h.totalTriangles * 3);
+      this.cw.fill(NONE, 0, 3 * h.baseTriangles);
       const wc = this.wedgeColumns(cols);
-      for (let i = 0; i < 3 * h.baseTriangles; i++) this.cw[i] = wc.next();
+      for (let i = 0; i < 3 * h.baseTriangles; i++) wc.next((i / 3) | 0, i % 3, undefined, null);
       wc.finish();
       this.baseCW = this.cw.slice(0, 3 * h.baseTriangles);
     }
@@ -345,35 +382,134 @@ export class StreamDecoder {
     return r;
   }
 
-  // wedge references of a chunk: refs, groups, values; next() = wedge id
+  // The candidate wedges of corner (t, s) (docs/LODGEN_progressive.md):
+  // wedges at its vertex in the triangles sharing an edge with t, then
+  // `before`, then every other wedge at the vertex.
+  candidates(t, s, before) {
+    const tri = this.tri, cw = this.cw, cand = this.cand;
+    cand.length = 0;
+    const o = 3 * t, u = tri[o + s], a = tri[o + ((s + 1) % 3)], b = tri[o + ((s + 2) % 3)];
+    const fan = this.fans[u];
+    const push = (w) => { if (w !== NONE && !cand.includes(w)) cand.push(w); };
+    for (let i = 0; i < fan.length; i++) {
+      const t2 = fan[i];
+      if (t2 === t) continue;
+      const p = 3 * t2, g0 = tri[p], g1 = tri[p + 1], g2 = tri[p + 2];
+      if ((a !== u && (g0 === a || g1 === a || g2 === a)) || (b !== u && (g0 === b || g1 === b || g2 === b))) {
+        if (g0 === u) push(cw[p]);
+        if (g1 === u) push(cw[p + 1]);
+        if (g2 === u) push(cw[p + 2]);
+      }
+    }
+    if (before !== undefined) push(before);
+    for (let i = 0; i < fan.length; i++) {
+      const t2 = fan[i];
+      if (t2 === t) continue;
+      const p = 3 * t2;
+      if (tri[p] === u) push(cw[p]);
+      if (tri[p + 1] === u) push(cw[p + 1]);
+      if (tri[p + 2] === u) push(cw[p + 2]);
+    }
+  }
+
+  // The wedges predicting a new wedge's values at corner (t, s):
+  // [kind, a, b, c], kind 0 = none, 1 = a, 2 = a + b - c.
+  predictor(t, s, rec) {
+    const tri = this.tri, cw = this.cw, o = 3 * t;
+    if (rec && rec.wings && tri[o + s] === rec.v0 && (t === rec.wings[0] || t === rec.wings[1])) {
+      const { v0, v1 } = rec, t2 = t === rec.wings[0] ? rec.wings[1] : rec.wings[0], p = 3 * t2;
+      let x = -1, y = -1, s1 = -1, s2 = -1;
+      for (let i = 0; i < 3; i++) {
+        if (x < 0 && tri[o + i] !== v0 && tri[o + i] !== v1) x = i;
+        if (y < 0 && tri[p + i] !== v0 && tri[p + i] !== v1) y = i;
+        if (s1 < 0 && tri[o + i] === v1) s1 = i;
+        if (s2 < 0 && tri[p + i] === v1) s2 = i;
+      }
+      if (x >= 0 && y >= 0 && s1 >= 0 && s2 >= 0) {
+        const wx = cw[o + x], wy = cw[p + y], w1 = cw[o + s1];
+        if (wx !== NONE && wy !== NONE && w1 !== NONE && w1 === cw[p + s2]) return [2, wx, wy, w1];
+      }
+    }
+    if (rec) for (let i = 0; i < 3; i++) if (i !== s && tri[o + i] === rec.v1 && cw[o + i] !== NONE) return [1, cw[o + i]];
+    for (const i of [(s + 1) % 3, (s + 2) % 3]) if (cw[o + i] !== NONE) return [1, cw[o + i]];
+    return [0];
+  }
+
+  // wedge references of a chunk: refs, groups, values; next(t, s, before,
+  // rec) = the wedge of corner (t, s), recorded there
   wedgeColumns(cols) {
     const w = this.header.wedges, dec = this;
     const refs = cols.u32("wedge reference");
     let fresh = 0;
     for (const c of refs) if (c === 0) fresh++;
     const groups = w.groups > 1 ? cols.u32("wedge group", fresh) : null;
+    // per channel: zigzag f32 bit residuals, or quantized residuals (padded lanes)
     const values = w.channels.map((c) => {
-      const b = cols.vertices("attribute", 4 * c.components, fresh);
-      return new Float32Array(b.buffer, b.byteOffset, b.length / 4);
+      if (c.encoding === 0) {
+        const b = cols.vertices("attribute", 4 * c.components, fresh);
+        const z = new Uint32Array(b.buffer, b.byteOffset, b.length / 4);
+        for (let i = 0; i < z.length; i++) z[i] = (z[i] >>> 1) ^ -(z[i] & 1);
+        return z;
+      }
+      const b = cols.vertices("attribute", 2 * c.padded, fresh);
+      const sums = new Uint16Array(b.buffer, b.byteOffset, b.length / 2), res = new Uint16Array(sums.length);
+      for (let i = 0; i < sums.length; i++) res[i] = i < c.padded ? sums[i] : sums[i] - sums[i - c.padded];
+      return res;
     });
     let pos = 0, k = 0;
+    const define = (t, s, rec) => {
+      if (dec.nw >= w.total) throw new Error(`more wedges than the ${w.total} announced`);
+      const g = groups ? groups[k] : 0;
+      if (g >= w.groups) throw new Error(`wedge group ${g} out of range`);
+      const id = dec.nw;
+      dec.wgroups[id] = g;
+      const p = dec.predictor(t, s, rec), qp = dec.qpred, fp = dec.fpred, qs = w.qstride, fs = w.fstride;
+      if (p[0] === 0) { qp.fill(0); fp.fill(0); }
+      else if (p[0] === 1) {
+        for (let i = 0; i < qs; i++) qp[i] = dec.qv[p[1] * qs + i];
+        for (let i = 0; i < fs; i++) fp[i] = dec.fvBits[p[1] * fs + i];
+      } else {
+        for (let i = 0; i < qs; i++) qp[i] = dec.qv[p[1] * qs + i] + dec.qv[p[2] * qs + i] - dec.qv[p[3] * qs + i];
+        for (let i = 0; i < fs; i++) {
+          const x = Math.fround(dec.fv[p[1] * fs + i] + dec.fv[p[2] * fs + i] - dec.fv[p[3] * fs + i]);
+          if (Number.isFinite(x)) { dec.f32[0] = x; fp[i] = dec.f32Bits[0]; } else fp[i] = 0;
+        }
+      }
+      w.channels.forEach((c, ci) => {
+        const out = id * w.stride + c.offset;
+        if (c.encoding === 0) {
+          for (let j = 0; j < c.components; j++) {
+            const bits = (fp[c.flane + j] + values[ci][k * c.components + j]) >>> 0;
+            dec.fvBits[id * fs + c.flane + j] = bits;
+            dec.wvalsBits[out + j] = bits;
+          }
+        } else {
+          for (let j = 0; j < c.components; j++) {
+            const q = (qp[c.qlane + j] + values[ci][k * c.padded + j]) & 0xffff;
+            if (q > ENC_MAX[c.encoding]) throw new Error(`attribute value ${q} over ${ENC_MAX[c.encoding]}`);
+            dec.qv[id * qs + c.qlane + j] = q;
+            dec.wvals[out + j] = dequantize(c.encoding, q);
+          }
+        }
+      });
+      k++;
+      return dec.nw++;
+    };
     return {
-      next() {
+      next(t, s, before, rec) {
         if (pos >= refs.length) throw new Error("the wedge reference column ends early");
         const code = refs[pos++];
-        if (code > 0) {
-          if (code > dec.nw) throw new Error(`wedge reference ${code} out of range`);
-          return dec.nw - code;
+        dec.candidates(t, s, before);
+        let id;
+        if (code === 0) id = define(t, s, rec);
+        else {
+          const n = dec.cand.length;
+          if (code <= n) id = dec.cand[code - 1];
+          else if (code - n <= dec.nw) id = dec.nw - (code - n);
+          else throw new Error(`wedge reference ${code} out of range`);
         }
-        if (dec.nw >= w.total) throw new Error(`more wedges than the ${w.total} announced`);
-        const g = groups ? groups[k] : 0;
-        if (g >= w.groups) throw new Error(`wedge group ${g} out of range`);
-        dec.wgroups[dec.nw] = g;
-        w.channels.forEach((c, i) => {
-          dec.wvals.set(values[i].subarray(k * c.components, (k + 1) * c.components), dec.nw * w.stride + c.offset);
-        });
-        k++;
-        return dec.nw++;
+        dec.cw[3 * t + s] = id;
+        return id;
       },
       finish() {
         if (pos !== refs.length) throw new Error("wedge references left over");
@@ -463,16 +599,20 @@ export class StreamDecoder {
     const rec = { v1, v0, p1: [0, 0, 0], pm: [0, 0, 0], p0: [0, 0, 0], faces, corners,
       wfaces: null, wafter: null, wbefore: null };
     if (wc) {
-      rec.wfaces = new Uint32Array(3 * nf);
-      for (let k = 0; k < 3 * nf; k++) rec.wfaces[k] = wc.next();
-      this.cw.set(rec.wfaces, 3 * (this.nt - nf));
+      const first = this.nt - nf, cw = this.cw, tri = this.tri;
+      const wf = wingFaces(faces, v0, v1);
+      const ctx = { v0, v1, wings: wf ? [first + wf[0], first + wf[1]] : null };
+      cw.fill(NONE, 3 * first, 3 * this.nt);
+      for (let pass = 0; pass < 2; pass++) {
+        for (let c = 3 * first; c < 3 * this.nt; c++) {
+          if ((tri[c] === v0) === (pass === 1)) wc.next((c / 3) | 0, c % 3, undefined, ctx);
+        }
+      }
+      rec.wfaces = cw.slice(3 * first, 3 * this.nt);
       rec.wafter = new Uint32Array(corners.length);
       rec.wbefore = new Uint32Array(corners.length);
-      corners.forEach((c, k) => {
-        rec.wafter[k] = wc.next();
-        rec.wbefore[k] = this.cw[c];
-        this.cw[c] = rec.wafter[k];
-      });
+      corners.forEach((c, k) => { rec.wbefore[k] = cw[c]; cw[c] = NONE; });
+      corners.forEach((c, k) => { rec.wafter[k] = wc.next((c / 3) | 0, c % 3, rec.wbefore[k], ctx); });
     }
     return rec;
   }

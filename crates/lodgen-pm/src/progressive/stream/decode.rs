@@ -4,6 +4,7 @@ use super::columns::{differences, BitReader, ColumnReader, Words};
 use super::header::{self, ReadError, Reader};
 use super::topo::{self, Topo, FACE_ESCAPE};
 use super::types::{invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS};
+use super::wedges::{face_corner_order, Rec, Shared, WedgeColumns, WedgeState, NONE};
 use crate::mesh::Mesh;
 use crate::progressive::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 use smallvec::SmallVec;
@@ -21,98 +22,6 @@ struct State {
     wedges: Option<WedgeState>,
     /// Per vertex: index in the current chunk's moved list + 1 (0 = none).
     moved_slot: Vec<u32>,
-}
-
-/// The decoder's wedges: every current corner's, and every wedge's values.
-#[derive(Clone, Debug, Default)]
-struct WedgeState {
-    corners: Vec<[u32; 3]>,
-    attributes: WedgeAttributes,
-}
-
-/// One chunk's wedge columns, consumed reference by reference.
-struct WedgeColumns {
-    refs: Vec<u32>,
-    pos: usize,
-    groups: Vec<u32>,
-    /// Per channel, the new wedges' values.
-    values: Vec<Vec<f32>>,
-    new: usize,
-    at: usize,
-}
-
-impl WedgeColumns {
-    fn read(r: &mut ColumnReader, layout: &WedgeLayout, limit: usize) -> Result<Self, StreamError> {
-        let at = r.offset();
-        let refs: Vec<u32> = r.vertices("wedge reference", None, limit)?;
-        let new = refs.iter().filter(|&&c| c == 0).count();
-        let groups = if layout.groups > 1 {
-            r.vertices("wedge group", Some(new), 0)?
-        } else {
-            Vec::new()
-        };
-        let mut values = Vec::with_capacity(layout.channels.len());
-        for c in &layout.channels {
-            let raw = r.strided("attribute", Some(new), 0, 4 * usize::from(c.components))?;
-            values.push(
-                raw.chunks_exact(4)
-                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect(),
-            );
-        }
-        Ok(WedgeColumns {
-            refs,
-            pos: 0,
-            groups,
-            values,
-            new: 0,
-            at,
-        })
-    }
-
-    /// The next reference as a wedge id, defining the wedge when new.
-    fn next(&mut self, ws: &mut WedgeState, layout: &WedgeLayout) -> Result<u32, StreamError> {
-        let at = self.at;
-        let code = *self
-            .refs
-            .get(self.pos)
-            .ok_or_else(|| invalid(at, "the wedge reference column ends early"))?;
-        self.pos += 1;
-        let a = &mut ws.attributes;
-        if code > 0 {
-            return if code as usize <= a.count {
-                Ok((a.count - code as usize) as u32)
-            } else {
-                Err(invalid(at, format!("wedge reference {code} out of range")))
-            };
-        }
-        if a.count >= layout.total {
-            return Err(invalid(
-                at,
-                format!("more wedges than the {} announced", layout.total),
-            ));
-        }
-        let g = self.groups.get(self.new).copied().unwrap_or(0);
-        if g >= layout.groups {
-            return Err(invalid(at, format!("wedge group {g} out of range")));
-        }
-        a.groups.push(g);
-        for (c, v) in layout.channels.iter().zip(&self.values) {
-            let n = usize::from(c.components);
-            a.values.extend_from_slice(&v[self.new * n..][..n]);
-        }
-        self.new += 1;
-        a.count += 1;
-        Ok((a.count - 1) as u32)
-    }
-
-    fn finish(&self) -> Result<(), StreamError> {
-        if self.pos == self.refs.len() {
-            Ok(())
-        } else {
-            Err(invalid(self.at, "wedge references left over"))
-        }
-    }
 }
 
 fn decode_base(h: &StreamHeader, bytes: &[u8], base: usize) -> Result<State, StreamError> {
@@ -136,21 +45,22 @@ fn decode_base(h: &StreamHeader, bytes: &[u8], base: usize) -> Result<State, Str
     let triangles: Vec<[u32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let wedges = match &h.wedges {
         Some(layout) => {
+            let components: Vec<u8> = layout.channels.iter().map(|c| c.components).collect();
             let mut ws = WedgeState {
-                corners: Vec::with_capacity(h.total_triangles.min(MAX_PREALLOC)),
+                sh: Shared::new(&layout.encodings, &components),
                 attributes: WedgeAttributes {
                     channels: layout.channels.clone(),
                     ..WedgeAttributes::default()
                 },
             };
+            ws.sh.cw = Vec::with_capacity(h.total_triangles.min(MAX_PREALLOC));
+            ws.sh.cw.resize(h.base_triangles, [NONE; 3]);
             let mut wc = WedgeColumns::read(&mut r, layout, 3 * h.base_triangles)?;
-            for _ in 0..h.base_triangles {
-                let t = [
-                    wc.next(&mut ws, layout)?,
-                    wc.next(&mut ws, layout)?,
-                    wc.next(&mut ws, layout)?,
-                ];
-                ws.corners.push(t);
+            let fans = Topo::new(nv, &triangles).fans;
+            for t in 0..h.base_triangles as u32 {
+                for s in 0..3 {
+                    wc.next(&mut ws, layout, &triangles, &fans, (t, s), None, None)?;
+                }
             }
             wc.finish()?;
             Some(ws)
@@ -304,7 +214,15 @@ fn replay(
     }
     let wedges = match (&h.wedges, &mut st.wedges, &mut c.wedges) {
         (Some(layout), Some(ws), Some(wc)) => {
-            Some(replay_wedges(ws, wc, layout, &faces, &corners)?)
+            let first = st.mesh.triangles.len() - faces.len();
+            let rec = Rec {
+                v0,
+                v1,
+                wings: topo::wing_faces(&faces, v0, v1)
+                    .map(|(a, b)| ((first + a) as u32, (first + b) as u32)),
+            };
+            let ctx = (&st.mesh.triangles[..], &st.topo.fans[..], rec);
+            Some(replay_wedges(ws, wc, layout, ctx, first, &corners)?)
         }
         _ => None,
     };
@@ -326,24 +244,31 @@ fn replay_wedges(
     ws: &mut WedgeState,
     wc: &mut WedgeColumns,
     layout: &WedgeLayout,
-    faces: &[[u32; 3]],
+    (tri, fans, rec): (&[[u32; 3]], &[Vec<u32>], Rec),
+    first: usize,
     corners: &[Corner],
 ) -> Result<SplitWedges, StreamError> {
-    let mut wf = SmallVec::with_capacity(faces.len());
-    for _ in faces {
-        let t = [
-            wc.next(ws, layout)?,
-            wc.next(ws, layout)?,
-            wc.next(ws, layout)?,
-        ];
-        ws.corners.push(t);
-        wf.push(t);
+    ws.sh.cw.resize(tri.len(), [NONE; 3]);
+    for (t, s) in face_corner_order(tri, first, tri.len() - first, rec.v0) {
+        wc.next(ws, layout, tri, fans, (t, s), None, Some(rec))?;
     }
+    let wf = ws.sh.cw[first..].iter().copied().collect();
+    let before: SmallVec<[u32; 8]> = corners
+        .iter()
+        .map(|k| std::mem::replace(&mut ws.sh.cw[k.triangle as usize][k.slot as usize], NONE))
+        .collect();
     let mut edits = Vec::with_capacity(corners.len());
-    for k in corners {
-        let after = wc.next(ws, layout)?;
-        let cw = &mut ws.corners[k.triangle as usize][k.slot as usize];
-        edits.push([std::mem::replace(cw, after), after]);
+    for (k, b) in corners.iter().zip(before) {
+        let after = wc.next(
+            ws,
+            layout,
+            tri,
+            fans,
+            (k.triangle, usize::from(k.slot)),
+            Some(b),
+            Some(rec),
+        )?;
+        edits.push([b, after]);
     }
     Ok(SplitWedges {
         faces: wf,
@@ -542,7 +467,7 @@ impl StreamDecoder {
                 self.state = decode_base(h, bytes, self.consumed)?;
                 self.base = Some(self.state.mesh.clone());
                 if let Some(w) = &self.state.wedges {
-                    self.base_wedges = w.corners.clone();
+                    self.base_wedges = w.sh.cw.clone();
                 }
             } else {
                 let n = chunk.records - h.chunks[self.chunks - 1].records;
@@ -603,7 +528,7 @@ impl StreamDecoder {
     /// The wedge of every corner of [`Self::mesh`], when the stream carries
     /// wedges (stream numbering: order of first appearance).
     pub fn wedges(&self) -> Option<&[[u32; 3]]> {
-        self.state.wedges.as_ref().map(|w| w.corners.as_slice())
+        self.state.wedges.as_ref().map(|w| w.sh.cw.as_slice())
     }
 
     /// The values of every wedge decoded so far, when the stream carries

@@ -4,9 +4,10 @@ use super::columns::{prefix_sums, BitWriter, ColumnWriter};
 use super::header;
 use super::topo::{self, Topo, FACE_ESCAPE};
 use super::types::{
-    chunk_ends, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamHeader, WedgeAttributes,
-    WedgeLayout, FLAG_ERRORS, FLAG_WEDGES,
+    chunk_ends, AttrEncoding, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamHeader,
+    WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES,
 };
+use super::wedges::{face_corner_order, padded, zigzag, Rec, Shared, NONE};
 use crate::progressive::{ProgressiveMesh, WedgeLog};
 
 /// Encode `pm` with `levels` (record counts, each clamped to `pm.len()`):
@@ -65,40 +66,103 @@ pub fn encode_with_attributes(
     ))
 }
 
-/// Collects one chunk's wedge references (`0` = a new wedge, else `count −
-/// id`), the new wedges' groups and values.
+/// Collects one chunk's wedge references (codes of [`Shared`]), the new
+/// wedges' groups and values.
 struct WedgeWriter<'a> {
     attributes: &'a WedgeAttributes,
     groups: u32,
+    sh: Shared,
     /// Log wedge id → stream id + 1 (0 = not yet written).
     ids: Vec<u32>,
-    count: u32,
     refs: Vec<u32>,
     new_groups: Vec<u32>,
-    /// Per channel, the new wedges' values as little-endian bytes.
+    /// Per channel, the new wedges' values as little-endian bytes: `f32`,
+    /// or the running sums of the quantized residuals (`u16` lanes).
     values: Vec<Vec<u8>>,
+    /// Per quantized channel, the running sums.
+    sums: Vec<u16>,
+    scratch: Vec<u16>,
 }
 
 impl WedgeWriter<'_> {
-    fn put(&mut self, w: u32) {
-        let id = &mut self.ids[w as usize];
-        if *id == 0 {
-            self.refs.push(0);
-            self.new_groups.push(self.attributes.group(w));
-            let mut at = 0;
-            let values = self.attributes.wedge(w);
-            for (c, out) in self.attributes.channels.iter().zip(&mut self.values) {
-                let n = usize::from(c.components);
-                for v in &values[at..at + n] {
-                    out.extend_from_slice(&v.to_le_bytes());
-                }
-                at += n;
+    /// Code log wedge `w` at corner `(t, s)` (whose wedge was `before` when
+    /// it is a corner edit) and record it there.
+    #[allow(clippy::too_many_arguments)]
+    fn put(
+        &mut self,
+        tri: &[[u32; 3]],
+        fans: &[Vec<u32>],
+        t: u32,
+        s: usize,
+        w: u32,
+        before: Option<u32>,
+        rec: Option<Rec>,
+    ) {
+        self.sh.candidates(tri, fans, t, s, before);
+        let id = match self.ids[w as usize] {
+            0 => {
+                self.refs.push(0);
+                self.define(tri, t, s, w, rec)
             }
-            self.count += 1;
-            *id = self.count;
-        } else {
-            self.refs.push(self.count + 1 - *id);
+            k => {
+                self.refs.push(self.sh.code_of(k - 1));
+                k - 1
+            }
+        };
+        self.sh.cw[t as usize][s] = id;
+    }
+
+    /// Define log wedge `w` as the next stream wedge, first used at corner
+    /// `(t, s)`.
+    fn define(&mut self, tri: &[[u32; 3]], t: u32, s: usize, w: u32, rec: Option<Rec>) -> u32 {
+        let a = self.attributes;
+        self.new_groups.push(a.group(w));
+        let mut pred = std::mem::take(&mut self.scratch);
+        let mut fpred = vec![0; self.sh.fstride];
+        pred.resize(self.sh.stride, 0);
+        let p = self.sh.predictor(tri, t, s, rec);
+        self.sh.predict_q(p, &mut pred);
+        self.sh.predict_f(p, &mut fpred);
+        let values = a.wedge(w);
+        let mut at = 0;
+        for (ci, (c, out)) in a.channels.iter().zip(&mut self.values).enumerate() {
+            let n = usize::from(c.components);
+            let e = self.sh.encodings[ci];
+            match self.sh.lane[ci] {
+                None => {
+                    let lane = self.sh.flane[ci].unwrap_or(0);
+                    for (k, v) in values[at..at + n].iter().enumerate() {
+                        self.sh.fv.push(*v);
+                        let r = zigzag(v.to_bits().wrapping_sub(fpred[lane + k]));
+                        out.extend_from_slice(&r.to_le_bytes());
+                    }
+                }
+                Some(lane) => {
+                    for k in 0..padded(c.components) {
+                        let q = if k < n { e.quantize(values[at + k]) } else { 0 };
+                        let r = if k < n {
+                            q.wrapping_sub(pred[lane + k])
+                        } else {
+                            0
+                        };
+                        if k < n {
+                            self.sh.qv.push(q);
+                            let sum = &mut self.sums[lane + k];
+                            *sum = sum.wrapping_add(r);
+                            out.extend_from_slice(&sum.to_le_bytes());
+                        } else {
+                            out.extend_from_slice(&[0, 0]);
+                        }
+                    }
+                }
+            }
+            at += n;
         }
+        self.scratch = pred;
+        let id = self.sh.count;
+        self.sh.count += 1;
+        self.ids[w as usize] = id + 1;
+        id
     }
 
     /// The chunk's wedge columns: references, groups (with several), values
@@ -109,10 +173,21 @@ impl WedgeWriter<'_> {
             cw.vertices(&self.new_groups);
         }
         let n = self.new_groups.len();
-        for (c, v) in self.attributes.channels.iter().zip(&mut self.values) {
-            cw.strided(v, n, 4 * usize::from(c.components));
+        for (ci, (c, v)) in self
+            .attributes
+            .channels
+            .iter()
+            .zip(&mut self.values)
+            .enumerate()
+        {
+            let size = match self.sh.lane[ci] {
+                None => 4 * usize::from(c.components),
+                Some(_) => 2 * padded(c.components),
+            };
+            cw.strided(v, n, size);
             v.clear();
         }
+        self.sums.fill(0);
         self.refs.clear();
         self.new_groups.clear();
     }
@@ -140,8 +215,10 @@ fn base_chunk(pm: &ProgressiveMesh, st: &mut State) -> Vec<u8> {
     let flat: Vec<u32> = pm.base.triangles.iter().flatten().copied().collect();
     cw.sequence(&flat, pm.base.positions.len());
     if let Some((log, w)) = &mut st.wedges {
-        for &c in log.base.iter().flatten() {
-            w.put(c);
+        for (t, ws) in log.base.iter().enumerate() {
+            for (s, &c) in ws.iter().enumerate() {
+                w.put(&st.triangles, &st.topo.fans, t as u32, s, c, None, None);
+            }
         }
         w.flush(&mut cw);
     }
@@ -208,11 +285,27 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
     }
     if let Some((log, w)) = &mut st.wedges {
         let sw = &log.splits[i];
-        for &c in sw.faces.iter().flatten() {
-            w.put(c);
+        let first = st.triangles.len() - nf;
+        let rec = Rec {
+            v0,
+            v1: s.v1,
+            wings: topo::wing_faces(&s.faces, v0, s.v1)
+                .map(|(a, b)| ((first + a) as u32, (first + b) as u32)),
+        };
+        w.sh.cw.resize(st.triangles.len(), [NONE; 3]);
+        let order: Vec<(u32, usize)> = face_corner_order(&st.triangles, first, nf, v0).collect();
+        for (t, k) in order {
+            let c = sw.faces[t as usize - first][k];
+            w.put(&st.triangles, &st.topo.fans, t, k, c, None, Some(rec));
         }
-        for c in &sw.corners {
-            w.put(c[1]);
+        let before: Vec<u32> = s
+            .corners
+            .iter()
+            .map(|c| std::mem::replace(&mut w.sh.cw[c.triangle as usize][c.slot as usize], NONE))
+            .collect();
+        for ((c, e), b) in s.corners.iter().zip(&sw.corners).zip(before) {
+            let (t, k) = (c.triangle, usize::from(c.slot));
+            w.put(&st.triangles, &st.topo.fans, t, k, e[1], Some(b), Some(rec));
         }
     }
     if st.errors {
@@ -272,6 +365,33 @@ fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec
     cw.out
 }
 
+fn components(a: &WedgeAttributes) -> Vec<u8> {
+    a.channels.iter().map(|c| c.components).collect()
+}
+
+/// Each channel's encoding: [`AttrEncoding::choose`] on its values, or
+/// `f32` everywhere when `exact`.
+fn encodings_for(a: &WedgeAttributes, exact: bool) -> Vec<AttrEncoding> {
+    let stride = a.stride();
+    let mut at = 0;
+    a.channels
+        .iter()
+        .map(|c| {
+            let n = usize::from(c.components);
+            let from = at;
+            at += n;
+            if exact || stride == 0 {
+                return AttrEncoding::F32;
+            }
+            let values = a
+                .values
+                .chunks_exact(stride)
+                .flat_map(|w| w[from..from + n].iter().copied());
+            AttrEncoding::choose(&c.name, values)
+        })
+        .collect()
+}
+
 fn encode_inner(
     pm: &ProgressiveMesh,
     levels: &[usize],
@@ -292,6 +412,9 @@ fn encode_inner(
     let groups = wedges.map_or(1, |(_, a, _)| {
         a.groups.iter().max().map_or(1, |&g| g.saturating_add(1))
     });
+    let encodings: Vec<AttrEncoding> = wedges.map_or_else(Vec::new, |(_, a, _)| {
+        encodings_for(a, opts.exact_attributes)
+    });
     let mut st = State {
         grid,
         triangles: pm.base.triangles.clone(),
@@ -305,16 +428,21 @@ fn encode_inner(
             .collect(),
         moved_slot: vec![0; total_vertices],
         wedges: wedges.map(|(log, a, _)| {
+            let mut sh = Shared::new(&encodings, &components(a));
+            sh.cw = vec![[NONE; 3]; pm.base.triangles.len()];
+            let lanes = sh.stride;
             (
                 log,
                 WedgeWriter {
                     attributes: a,
                     groups,
+                    sh,
                     ids: vec![0; a.count],
-                    count: 0,
                     refs: Vec::new(),
                     new_groups: Vec::new(),
                     values: vec![Vec::new(); a.channels.len()],
+                    sums: vec![0; lanes],
+                    scratch: Vec::new(),
                 },
             )
         }),
@@ -339,6 +467,7 @@ fn encode_inner(
             total,
             groups,
             channels: a.channels.clone(),
+            encodings: encodings.clone(),
         }),
         chunks: chunks
             .iter()

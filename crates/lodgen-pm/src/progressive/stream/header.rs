@@ -3,8 +3,8 @@
 
 use super::columns::put_varint;
 use super::types::{
-    invalid, Channel, ChunkInfo, Grid, StreamError, StreamHeader, WedgeLayout, FLAG_ERRORS,
-    FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
+    invalid, AttrEncoding, Channel, ChunkInfo, Grid, StreamError, StreamHeader, WedgeLayout,
+    FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
 };
 
 /// The header's bytes (with `h.chunks` as given).
@@ -38,6 +38,9 @@ pub(super) fn write(h: &StreamHeader) -> Vec<u8> {
             put_varint(&mut out, c.name.len() as u64);
             out.extend_from_slice(c.name.as_bytes());
             out.push(c.components);
+        }
+        for e in &layout.encodings {
+            out.push(e.code());
         }
     }
     put_varint(&mut out, h.chunks.len() as u64);
@@ -160,10 +163,20 @@ fn parse_wedges(r: &mut Reader, max: u64) -> Result<WedgeLayout, ReadError> {
         }
         channels.push(Channel { name, components });
     }
+    let mut encodings = Vec::with_capacity(n);
+    for _ in 0..n {
+        let at = r.pos;
+        let code = r.byte()?;
+        encodings.push(
+            AttrEncoding::from_code(code)
+                .ok_or_else(|| invalid(at, format!("unknown attribute encoding {code}")))?,
+        );
+    }
     Ok(WedgeLayout {
         total,
         groups,
         channels,
+        encodings,
     })
 }
 

@@ -34,11 +34,12 @@ mod encode;
 mod header;
 mod topo;
 mod types;
+mod wedges;
 
 pub use decode::{decode, decode_header, decode_with_attributes, Decoded, StreamDecoder};
 pub use encode::{encode, encode_with_attributes};
 pub use types::{
-    Channel, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamError, StreamHeader,
+    AttrEncoding, Channel, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamError, StreamHeader,
     WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME,
     MAX_COMPONENTS, VERSION,
 };

@@ -146,16 +146,26 @@ pub(super) fn corner_of(code: u32, v0: u32, v1: u32) -> Option<u32> {
     }
 }
 
-/// The third vertices of a split's first two faces holding both `v0` and
-/// `v1`, when both exist and differ: the parallelogram predictor's wings.
-pub(super) fn wings(faces: &[[u32; 3]], v0: u32, v1: u32) -> Option<(u32, u32)> {
-    let mut xs = faces.iter().filter_map(|f| {
-        let others: Vec<u32> = f.iter().copied().filter(|&c| c != v0 && c != v1).collect();
-        (others.len() == 1 && f.contains(&v0) && f.contains(&v1)).then(|| others[0])
+/// The indices (in `faces`) of a split's first two faces holding both `v0`
+/// and `v1` and one other vertex, when both exist and their third vertices
+/// differ: the split's wing faces.
+pub(super) fn wing_faces(faces: &[[u32; 3]], v0: u32, v1: u32) -> Option<(usize, usize)> {
+    let mut xs = faces.iter().enumerate().filter_map(|(i, f)| {
+        let mut others = f.iter().copied().filter(|&c| c != v0 && c != v1);
+        let x = others.next()?;
+        (others.next().is_none() && f.contains(&v0) && f.contains(&v1)).then_some((i, x))
     });
-    let a = xs.next()?;
-    let b = xs.next()?;
-    (a != b).then_some((a, b))
+    let (i, a) = xs.next()?;
+    let (j, b) = xs.next()?;
+    (a != b).then_some((i, j))
+}
+
+/// The third vertices of the wing faces ([`wing_faces`]): the
+/// parallelogram predictor's wings.
+pub(super) fn wings(faces: &[[u32; 3]], v0: u32, v1: u32) -> Option<(u32, u32)> {
+    let third = |f: &[u32; 3]| f.iter().copied().find(|&c| c != v0 && c != v1);
+    let (i, j) = wing_faces(faces, v0, v1)?;
+    Some((third(&faces[i])?, third(&faces[j])?))
 }
 
 /// The prediction of a new vertex's grid point at the end of its chunk:

@@ -7,7 +7,7 @@ use thiserror::Error;
 /// The four bytes every stream starts with.
 pub const MAGIC: [u8; 4] = *b"LGPM";
 /// The layout version this module writes and reads.
-pub const VERSION: u8 = 2;
+pub const VERSION: u8 = 3;
 /// Header flag: the stream stores every record's `error` (`f32`).
 pub const FLAG_ERRORS: u8 = 1;
 /// Header flag: the stream carries wedges (attributes per corner): a wedge
@@ -110,6 +110,9 @@ pub struct EncodeOptions {
     /// The grid; default: [`Grid::around`] every position the log ever
     /// holds, with `bits`.
     pub grid: Option<Grid>,
+    /// Store every attribute value as exact `f32` instead of the compact
+    /// encodings of [`AttrEncoding::choose`]. Default value: false.
+    pub exact_attributes: bool,
 }
 
 impl EncodeOptions {
@@ -117,6 +120,7 @@ impl EncodeOptions {
         bits: 16,
         errors: false,
         grid: None,
+        exact_attributes: false,
     };
 
     pub fn with_bits(mut self, bits: u8) -> Self {
@@ -126,6 +130,12 @@ impl EncodeOptions {
 
     pub fn with_errors(mut self, on: bool) -> Self {
         self.errors = on;
+        self
+    }
+
+    /// Keep attribute values exact (`f32`) instead of quantizing them.
+    pub fn with_exact_attributes(mut self, on: bool) -> Self {
+        self.exact_attributes = on;
         self
     }
 
@@ -270,6 +280,106 @@ impl WedgeAttributes {
     }
 }
 
+/// How a channel's values are stored: exact `f32`, or the normalized
+/// integers lodgen's `--quantize` writes in glTF (`KHR_mesh_quantization`),
+/// decoded as the glTF spec dequantizes them (`q / 65535`, `q / 127`,
+/// `q / 255`, each computed in `f64` and rounded once to `f32`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttrEncoding {
+    /// Exact `f32` (code 0).
+    F32,
+    /// Unsigned normalized 16-bit, values in [0, 1] (code 1): texture
+    /// coordinates.
+    Unorm16,
+    /// Signed normalized 8-bit, values in [-1, 1] (code 2): normals,
+    /// tangents.
+    Snorm8,
+    /// Unsigned normalized 8-bit, values in [0, 1] (code 3): colours.
+    Unorm8,
+}
+
+impl AttrEncoding {
+    pub fn code(self) -> u8 {
+        match self {
+            AttrEncoding::F32 => 0,
+            AttrEncoding::Unorm16 => 1,
+            AttrEncoding::Snorm8 => 2,
+            AttrEncoding::Unorm8 => 3,
+        }
+    }
+
+    pub fn from_code(code: u8) -> Option<AttrEncoding> {
+        Some(match code {
+            0 => AttrEncoding::F32,
+            1 => AttrEncoding::Unorm16,
+            2 => AttrEncoding::Snorm8,
+            3 => AttrEncoding::Unorm8,
+            _ => return None,
+        })
+    }
+
+    /// What lodgen's `--quantize` writes for a glTF attribute `name` whose
+    /// values are `values`: `NORMAL` / `TANGENT` snorm8, `TEXCOORD_n`
+    /// unorm16 and `COLOR_n` unorm8 when every value is in [0, 1]; else (and
+    /// for joints and weights) `f32`.
+    pub fn choose(name: &str, mut values: impl Iterator<Item = f32>) -> AttrEncoding {
+        let unit = |x: f32| (0.0..=1.0).contains(&x);
+        if name == "NORMAL" || name == "TANGENT" {
+            if values.all(f32::is_finite) {
+                return AttrEncoding::Snorm8;
+            }
+        } else if name.starts_with("TEXCOORD_") {
+            if values.all(unit) {
+                return AttrEncoding::Unorm16;
+            }
+        } else if name.starts_with("COLOR_") && values.all(unit) {
+            return AttrEncoding::Unorm8;
+        }
+        AttrEncoding::F32
+    }
+
+    /// Largest stored integer (`F32`: none).
+    pub(super) fn max(self) -> u16 {
+        match self {
+            AttrEncoding::F32 => 0,
+            AttrEncoding::Unorm16 => u16::MAX,
+            AttrEncoding::Snorm8 => 254,
+            AttrEncoding::Unorm8 => 255,
+        }
+    }
+
+    /// The stored integer of `x` (snorm8 offset by 127 to be unsigned), as
+    /// the glTF writer rounds and clamps it.
+    pub fn quantize(self, x: f32) -> u16 {
+        let x = f64::from(x);
+        match self {
+            AttrEncoding::F32 => 0,
+            AttrEncoding::Unorm16 => (x * 65535.0).round().clamp(0.0, 65535.0) as u16,
+            AttrEncoding::Snorm8 => ((x * 127.0).round().clamp(-127.0, 127.0) + 127.0) as u16,
+            AttrEncoding::Unorm8 => (x * 255.0).round().clamp(0.0, 255.0) as u16,
+        }
+    }
+
+    /// The value of stored integer `q`.
+    pub fn dequantize(self, q: u16) -> f32 {
+        let q = f64::from(q);
+        (match self {
+            AttrEncoding::F32 => 0.0,
+            AttrEncoding::Unorm16 => q / 65535.0,
+            AttrEncoding::Snorm8 => (q - 127.0) / 127.0,
+            AttrEncoding::Unorm8 => q / 255.0,
+        }) as f32
+    }
+
+    /// `x` after the round trip through this encoding (`F32`: itself).
+    pub fn round_trip(self, x: f32) -> f32 {
+        match self {
+            AttrEncoding::F32 => x,
+            e => e.dequantize(e.quantize(x)),
+        }
+    }
+}
+
 /// The wedge part of a header (present with [`FLAG_WEDGES`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct WedgeLayout {
@@ -278,6 +388,8 @@ pub struct WedgeLayout {
     /// Groups are `0 .. groups`; with one group none is stored.
     pub groups: u32,
     pub channels: Vec<Channel>,
+    /// Parallel to `channels`: how each is stored.
+    pub encodings: Vec<AttrEncoding>,
 }
 
 /// One chunk of the stream: the records it completes and its size.
