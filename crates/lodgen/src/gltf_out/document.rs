@@ -245,9 +245,11 @@ fn attach_chains(
         };
         let Some(&c) = chain_of.get(mesh as usize).filter(|&&c| c != usize::MAX) else {
             // the reader left the mesh out (and said so): the node keeps
-            // its place in the tree without it
+            // its place in the tree without it, and without what needs a
+            // mesh (a skin, morph weights)
             if let Some(obj) = nodes[i].as_object_mut() {
                 obj.remove("mesh");
+                obj.remove("skin");
                 obj.remove("weights");
             }
             continue;
