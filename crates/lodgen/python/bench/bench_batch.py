@@ -7,6 +7,7 @@ as binary PLY), `lodgen DIR --out-dir OUT --jobs 2` against `--jobs 1`
 """
 
 import argparse
+import json
 import os
 import pathlib
 import resource
@@ -74,14 +75,18 @@ def main() -> int:
     print(f"{a.count} meshes, about {total} triangles in all ({sizes.min()}-{sizes.max()} each)")
     times = {1: [], 2: []}
     cpu = {1: [], 2: []}
+    busy = {1: [], 2: []}
+    report = base / "report.json"
     loads = [os.getloadavg()[0]]
     for _ in range(a.rounds):
         for jobs in (1, 2):
             t0, c0 = time.perf_counter(), children_cpu()
             subprocess.run([a.lodgen, str(src), "--out-dir", str(base / "out"), "--jobs", str(jobs),
-                            "--force", "-q"], check=True)
+                            "--force", "-q", "--report", str(report)], check=True)
             times[jobs].append(time.perf_counter() - t0)
             cpu[jobs].append(children_cpu() - c0)
+            r = json.loads(report.read_text())
+            busy[jobs].append(sum(f["seconds"] for f in r["files"]) / r["seconds"])
             loads.append(os.getloadavg()[0])
     t0 = time.perf_counter()
     out = subprocess.run([a.lodgen, str(src), "--out-dir", str(base / "out"), "--jobs", "2"],
@@ -92,7 +97,9 @@ def main() -> int:
     for jobs in (1, 2):
         runs = ", ".join(f"{t:.2f}" for t in times[jobs])
         cpus = ", ".join(f"{t:.2f}" for t in cpu[jobs])
-        print(f"--jobs {jobs}: {statistics.median(times[jobs]):.2f} s wall (runs {runs}; CPU {cpus} s)")
+        files = ", ".join(f"{b:.2f}" for b in busy[jobs])
+        print(f"--jobs {jobs}: {statistics.median(times[jobs]):.2f} s wall (runs {runs}; CPU {cpus} s; "
+              f"files in progress on average {files})")
     pairs = [b / a for a, b in zip(times[1], times[2])]
     print(f"--jobs 2 / --jobs 1: {j2 / j1:.2f}x (medians); run by run {', '.join(f'{r:.2f}' for r in pairs)}")
     print(f"load average (1 min) during the runs: {min(loads):.2f}-{max(loads):.2f} on {os.cpu_count()} cores")
