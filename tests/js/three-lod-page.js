@@ -77,8 +77,9 @@ window.runProgressive = async (url, { stopAt = 0, keep = false } = {}) => {
   const events = [];
   const record = (e) => {
     const d = draw();
+    const t = t0() - start; // drawn (the hash below is the check's, not the loader's)
     events.push({ level: e.level, records: e.records, triangles: e.triangles, drawn: d.triangles, variance: d.variance,
-      hash: indexHash(p.geometry), t: t0() - start });
+      hash: indexHash(p.geometry), t });
   };
   record({ level: p.levels.length - 1, records: 0, triangles: p.nt });
   p.addEventListener('level', (e) => { if (e.records > 0) record(e); });

@@ -13,9 +13,11 @@
 // then only the coarsest MSFT_lod level's bytes, and lets GLTFLoader parse
 // that (a GLTFLoader plugin finds the primitive carrying LODGEN_progressive
 // and gives it a BufferGeometry sized for the finest level). `refine` then
-// fetches the stream chunk by chunk (one chunk per level) and applies each
-// to that geometry with update ranges (only the changed vertices and
-// indices are uploaded), dispatching a "level" event per level.
+// fetches the stream up to the level in one range request, read as it
+// arrives: each chunk (one per level) is
+// decoded while the next downloads; each level is applied to that geometry
+// with update ranges (only the changed vertices and indices are uploaded),
+// dispatching a "level" event per level.
 // `refineForScreen(camera, renderer)` refines to the level the file's
 // MSFT_screencoverage asks for at the object's current size on screen.
 //
@@ -183,7 +185,8 @@ export class ProgressiveMesh extends EventDispatcher {
     this.levels = found.ext.levels; // records per level, finest first
     this.applied = 0; // records applied to the geometry
     this.mesh = null;
-    this.fetched = 0; // stream chunks fetched
+    this.fetched = 0; // stream chunks decoded
+    this.requested = 0; // stream chunks requested
   }
 
   // Fetch and decode chunk 0 (header + base mesh) and set up the geometry.
@@ -192,7 +195,8 @@ export class ProgressiveMesh extends EventDispatcher {
       const head = await fetchRange(this.url, this.streamStart, this.streamStart + Math.min(this.streamLength, 4096), this.fetchOptions);
       this.chunkEnds = parseHeader(head).chunkEnds;
     }
-    await this.fetchChunk(0);
+    this.request(0);
+    await this.waitChunks(1);
     const d = this.decoder, h = d.header;
     const prim = this.json.meshes[this.found.mesh].primitives[this.found.primitive];
     const acc = this.json.accessors[prim.attributes.POSITION];
@@ -236,19 +240,58 @@ export class ProgressiveMesh extends EventDispatcher {
     g.computeBoundingSphere();
   }
 
-  // The bytes of stream chunk `i` (fetched once; requests run in parallel).
-  chunkBytes(i) {
-    this.requests = this.requests || [];
-    if (!this.requests[i]) {
-      const start = i === 0 ? 0 : this.chunkEnds[i - 1];
-      this.requests[i] = fetchRange(this.url, this.streamStart + start, this.streamStart + this.chunkEnds[i], this.fetchOptions);
-    }
-    return this.requests[i];
+  // Make sure chunks up to `last` are requested: one HTTP range for every
+  // chunk not yet asked for, read as it arrives (each chunk decoded as soon
+  // as its bytes are there, while the next ones download).
+  request(last) {
+    last = Math.min(last, this.chunkEnds.length - 1);
+    if (this.requested > last) return;
+    const from = this.requested || 0;
+    this.requested = last + 1;
+    const start = from === 0 ? 0 : this.chunkEnds[from - 1], end = this.chunkEnds[last];
+    const prev = this.pump || Promise.resolve();
+    this.pump = prev.then(() => this.streamRange(start, end)).catch((e) => {
+      this.error = e;
+      this.wake();
+    });
   }
 
-  async fetchChunk(i) {
-    this.decoder.push(await this.chunkBytes(i));
-    this.fetched = i + 1;
+  async streamRange(start, end) {
+    const a = this.streamStart + start, b = this.streamStart + end;
+    const resp = await fetch(this.url, { ...this.fetchOptions, headers: { Range: `bytes=${a}-${b - 1}` } });
+    if (resp.status !== 206 && resp.status !== 200) throw new Error(`${this.url}: HTTP ${resp.status}`);
+    if (resp.status === 200 || !resp.body) {
+      const all = new Uint8Array(await resp.arrayBuffer());
+      this.take(resp.status === 200 ? all.subarray(a, b) : all);
+      return;
+    }
+    const reader = resp.body.getReader();
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      this.take(value);
+    }
+  }
+
+  take(bytes) {
+    this.decoder.push(bytes);
+    this.fetched = this.decoder.chunksDone;
+    this.wake();
+  }
+
+  wake() {
+    const w = this.wakers || [];
+    this.wakers = [];
+    for (const f of w) f();
+  }
+
+  // Resolves once `n` chunks are decoded.
+  async waitChunks(n) {
+    while (this.decoder.chunksDone < n) {
+      if (this.error) throw this.error;
+      await new Promise((r) => (this.wakers = this.wakers || []).push(r));
+    }
+    if (this.error && this.decoder.chunksDone < n) throw this.error;
   }
 
   // Apply every decoded record up to `k` to the geometry.
@@ -284,15 +327,13 @@ export class ProgressiveMesh extends EventDispatcher {
   async refine(level = 0) {
     const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
     const h = this.decoder.header;
-    // ask for every chunk up to the level at once: the latencies overlap
-    for (let i = this.fetched; i < h.chunks.length && (i === 0 || h.chunks[i - 1].records < want); i++) this.chunkBytes(i);
-    while (this.applied < want) {
-      const i = h.chunks.findIndex((c) => c.records > this.applied);
-      if (this.fetched <= i) await this.fetchChunk(i);
-      const k = Math.min(want, h.chunks[i].records);
+    const chunkOf = (k) => h.chunks.findIndex((c) => c.records >= k);
+    this.request(chunkOf(want));
+    const steps = [...new Set(this.levels)].filter((k) => k > this.applied && k <= want).sort((a, b) => a - b);
+    for (const k of steps) {
+      await this.waitChunks(chunkOf(k) + 1);
       this.applyTo(k);
-      const lv = this.levels.indexOf(k);
-      this.dispatchEvent({ type: "level", level: lv, records: k, triangles: this.nt });
+      this.dispatchEvent({ type: "level", level: this.levels.indexOf(k), records: k, triangles: this.nt });
     }
     return this.level();
   }
@@ -347,11 +388,12 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   const coarse = hi > lo ? fetchRange(url, binStart + lo, binStart + hi, fetchOptions) : null;
   if (p.chunkEnds) {
     // in parallel with the coarse level: chunk 0, and with `prefetch` the
-    // chunks up to that level (chunk i ≥ 1 ends at the i-th level count)
+    // chunks up to that level, in one streamed range request
     const want = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
-    const ends = [...new Set(p.levels.filter((k) => k > 0))].sort((a, b) => a - b);
-    const n = 1 + ends.filter((e) => e <= want).length;
-    for (let i = 0; i < Math.min(n, p.chunkEnds.length); i++) p.chunkBytes(i);
+    p.request(0);
+    // which chunk ends which level is in the header: ask for the rest once
+    // chunk 0 (header + base) is in
+    if (want > 0) p.waitChunks(1).then(() => p.request(p.decoder.header.chunks.findIndex((c) => c.records >= want)), () => {});
   }
   if (coarse) bin.set(await coarse, lo);
   const plugin = (parser) => new LodgenProgressivePlugin(parser, found, (m) => { p.mesh = m; });

@@ -372,12 +372,25 @@ export class StreamDecoder {
     }
   }
 
+  // The vertices sharing a triangle with v, ascending, each once (a
+  // scratch array, valid until the next call).
   ring(v) {
-    const r = [];
-    for (const t of this.fans[v]) for (let i = 0; i < 3; i++) { const u = this.tri[3 * t + i]; if (u !== v) r.push(u); }
-    r.sort((a, b) => a - b);
+    const r = this.ringBuf || (this.ringBuf = []), tri = this.tri, fan = this.fans[v];
     let n = 0;
-    for (let i = 0; i < r.length; i++) if (i === 0 || r[i] !== r[i - 1]) r[n++] = r[i];
+    for (let i = 0; i < fan.length; i++) {
+      const o = 3 * fan[i];
+      for (let j = 0; j < 3; j++) {
+        const u = tri[o + j];
+        if (u === v) continue;
+        // insertion into the sorted prefix, skipping repeats
+        let k = n;
+        while (k > 0 && r[k - 1] > u) k--;
+        if (k > 0 && r[k - 1] === u) continue;
+        for (let m = n; m > k; m--) r[m] = r[m - 1];
+        r[k] = u;
+        n++;
+      }
+    }
     r.length = n;
     return r;
   }
@@ -594,7 +607,9 @@ export class StreamDecoder {
         if (j >= 0) f.splice(j, 1);
       }
       const f0 = this.fans[v0];
-      if (!f0.includes(t)) { f0.push(t); f0.sort((a, b) => a - b); }
+      let k = f0.length;
+      while (k > 0 && f0[k - 1] > t) k--;
+      if (k === 0 || f0[k - 1] !== t) f0.splice(k, 0, t);
     }
     const rec = { v1, v0, p1: [0, 0, 0], pm: [0, 0, 0], p0: [0, 0, 0], faces, corners,
       wfaces: null, wafter: null, wbefore: null };
