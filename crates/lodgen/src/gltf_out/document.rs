@@ -192,6 +192,32 @@ fn retarget_weight_channels(
     }
 }
 
+/// Node extensions that point at mesh data (instancing accessors) or at the
+/// input's own LOD chains no longer apply: they go, each named in a warning
+/// (the input's own MSFT_lod chains are replaced, not lost).
+fn drop_mesh_node_extensions(nodes: &mut [Value], warnings: &mut Vec<Warning>) {
+    for (i, node) in nodes.iter_mut().enumerate() {
+        // Node extensions that point at mesh data (instancing accessors) or
+        // at the input's own LOD chains no longer apply.
+        if let Some(Value::Object(ext)) = node.get_mut("extensions") {
+            // (the input's own MSFT_lod chains are replaced, not lost)
+            let lost = |k: &&String| DROPPED_EXTENSIONS.contains(&k.as_str()) && *k != "MSFT_lod";
+            for k in ext.keys().filter(lost) {
+                warnings.push(Warning::new(
+                    format!("nodes[{i}]"),
+                    format!("{k} dropped (it refers to the input's mesh data)"),
+                ));
+            }
+            ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
+            if ext.is_empty() {
+                if let Some(obj) = node.as_object_mut() {
+                    obj.remove("extensions");
+                }
+            }
+        }
+    }
+}
+
 /// Nodes: each node with a mesh gets that mesh's chain (with `quantize`, on
 /// a new child node that carries the dequantization).
 fn attach_chains(
@@ -213,26 +239,7 @@ fn attach_chains(
         Some(Value::Array(n)) => n,
         _ => Vec::new(),
     };
-    for (i, node) in nodes.iter_mut().enumerate() {
-        // Node extensions that point at mesh data (instancing accessors) or
-        // at the input's own LOD chains no longer apply.
-        if let Some(Value::Object(ext)) = node.get_mut("extensions") {
-            // (the input's own MSFT_lod chains are replaced, not lost)
-            let lost = |k: &&String| DROPPED_EXTENSIONS.contains(&k.as_str()) && *k != "MSFT_lod";
-            for k in ext.keys().filter(lost) {
-                warnings.push(Warning::new(
-                    format!("nodes[{i}]"),
-                    format!("{k} dropped (it refers to the input's mesh data)"),
-                ));
-            }
-            ext.retain(|k, _| !DROPPED_EXTENSIONS.contains(&k.as_str()));
-            if ext.is_empty() {
-                if let Some(obj) = node.as_object_mut() {
-                    obj.remove("extensions");
-                }
-            }
-        }
-    }
+    drop_mesh_node_extensions(&mut nodes, warnings);
     let original_count = nodes.len();
     // with `quantize`, the node whose mesh moves to a new child: its morph
     // weights (and their animation channels) go with the mesh
