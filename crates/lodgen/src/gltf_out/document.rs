@@ -251,13 +251,12 @@ fn attach_chains(
             continue;
         };
         let Some(&c) = chain_of.get(mesh as usize).filter(|&&c| c != usize::MAX) else {
-            // the reader left the mesh out (and said so): the node keeps
-            // its place in the tree without it, and without what needs a
-            // mesh (a skin, morph weights)
+            // the reader left the mesh out (and said so): the node stays in
+            // the tree without it and what needs it (a skin, morph weights)
             if let Some(obj) = nodes[i].as_object_mut() {
-                obj.remove("mesh");
-                obj.remove("skin");
-                obj.remove("weights");
+                for key in ["mesh", "skin", "weights"] {
+                    obj.remove(key);
+                }
             }
             continue;
         };
