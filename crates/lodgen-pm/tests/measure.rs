@@ -337,13 +337,9 @@ fn vertex_samples_count_towards_the_max_only() {
     let a = cube(0.5);
     let b = cube(0.4);
     let e = 0.5 - f64::from(0.4f32);
-    let with = measure(a.r(), b.r(), &MeasureOptions::DEFAULT).unwrap();
-    let without = measure(
-        a.r(),
-        b.r(),
-        &MeasureOptions::DEFAULT.with_vertex_samples(false),
-    )
-    .unwrap();
+    let dense = MeasureOptions::DEFAULT.with_min_samples(10_000);
+    let with = measure(a.r(), b.r(), &dense).unwrap();
+    let without = measure(a.r(), b.r(), &dense.with_vertex_samples(false)).unwrap();
     assert_eq!(without.a_to_b.samples, 10_000);
     assert_eq!(with.a_to_b.mean, without.a_to_b.mean);
     assert_eq!(with.a_to_b.rms, without.a_to_b.rms);
@@ -500,7 +496,7 @@ fn reference_equals_measure() {
 #[test]
 fn sample_budget_is_sub_linear_above_the_knee() {
     let o = MeasureOptions::DEFAULT;
-    assert_eq!(o.area_sample_count(100, 10), 10_000);
+    assert_eq!(o.area_sample_count(200, 10), 10_000);
     assert_eq!(o.area_sample_count(10, 200_000), 400_000);
     assert_eq!(o.area_sample_count(1 << 18, 5), 1 << 19);
     assert_eq!(o.area_sample_count(1 << 20, 5), 2 * (1 << 19));
@@ -730,4 +726,24 @@ fn bunny_bvh_matches_brute_force_and_translation_bounds_distance() {
     assert_close(r.diagonal, 0.2502, 1e-4, "bunny diagonal");
     // Defaults: 2 per triangle each way plus the 34,834 referenced vertices.
     assert_eq!(r.a_to_b.samples, 2 * 69_451 + 34_834);
+}
+
+#[test]
+fn sample_floor_is_capped_per_triangle_for_tiny_meshes() {
+    let d = MeasureOptions::DEFAULT;
+    // 64 per triangle of the larger mesh under 157 triangles, 10,000 from there on
+    assert_eq!(d.area_sample_count(12, 6), 768);
+    assert_eq!(d.area_sample_count(1, 1), 64);
+    assert_eq!(d.area_sample_count(200, 100), 10_000);
+    assert_eq!(d.area_sample_count(69_451, 1_388), 138_902);
+    // an explicit floor is taken as given
+    assert_eq!(
+        d.with_min_samples(100_000).area_sample_count(12, 6),
+        100_000
+    );
+    assert_eq!(
+        d.with_min_samples_per_triangle(8.0)
+            .area_sample_count(12, 6),
+        96
+    );
 }

@@ -78,6 +78,15 @@ pub struct MeasureOptions {
     ///
     /// Default value: 10,000.
     pub min_samples: usize,
+    /// Cap on that lower bound, per triangle of the larger mesh: a 12-triangle card is sampled
+    /// 768 times per direction, not 10,000 (plus every vertex). 64 samples per triangle put
+    /// the spacing at an eighth of the triangle's size; without the cap a scene of many small
+    /// meshes (a game level: 947 of 1,000 meshes under 157 triangles) spent ~60 % of its run
+    /// measuring them. The cap changes nothing from 157 triangles up.
+    /// [`MeasureOptions::with_min_samples`] removes it (an explicit bound is taken as given).
+    ///
+    /// Default value: 64.0.
+    pub min_samples_per_triangle: f64,
     /// Triangle count (of the larger mesh) up to which area samples are
     /// `samples_per_triangle` per triangle; above it they grow with the square root of the
     /// count (see the type's documentation for what that can miss).
@@ -99,6 +108,7 @@ impl MeasureOptions {
     pub const DEFAULT: MeasureOptions = MeasureOptions {
         samples_per_triangle: 2.0,
         min_samples: 10_000,
+        min_samples_per_triangle: 64.0,
         full_rate_triangles: 1 << 18,
         vertex_samples: true,
         seed: 0x6c6f_6467_656e,
@@ -109,8 +119,16 @@ impl MeasureOptions {
         self
     }
 
+    /// At least `min_samples` area samples per direction, whatever the meshes' size (the
+    /// per-triangle cap, [`MeasureOptions::min_samples_per_triangle`], is lifted).
     pub fn with_min_samples(mut self, min_samples: usize) -> Self {
         self.min_samples = min_samples;
+        self.min_samples_per_triangle = f64::INFINITY;
+        self
+    }
+
+    pub fn with_min_samples_per_triangle(mut self, min_samples_per_triangle: f64) -> Self {
+        self.min_samples_per_triangle = min_samples_per_triangle;
         self
     }
 
@@ -131,7 +149,8 @@ impl MeasureOptions {
 
     /// Area samples per direction for meshes of `tris_a` and `tris_b` triangles: with
     /// `t = max(tris_a, tris_b)` and `k = full_rate_triangles`,
-    /// `samples_per_triangle × (t if t ≤ k, else √(k·t))`, at least `min_samples`.
+    /// `samples_per_triangle × (t if t ≤ k, else √(k·t))`, at least
+    /// `min(min_samples, min_samples_per_triangle × t)`.
     pub fn area_sample_count(&self, tris_a: usize, tris_b: usize) -> usize {
         let per = if self.samples_per_triangle > 0.0 {
             self.samples_per_triangle
@@ -143,7 +162,13 @@ impl MeasureOptions {
         let effective = if t <= k { t } else { (k * t).sqrt() };
         // `as` saturates for huge values.
         let n = (per * effective).ceil() as usize;
-        n.max(self.min_samples)
+        let floor = if self.min_samples_per_triangle >= 0.0 {
+            // `as` saturates (infinity: no cap)
+            (self.min_samples_per_triangle * t).ceil() as usize
+        } else {
+            0
+        };
+        n.max(self.min_samples.min(floor))
     }
 }
 

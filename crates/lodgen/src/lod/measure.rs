@@ -84,6 +84,23 @@ impl<'a> Measurer<'a> {
         }
     }
 
+    /// The error of a level that is the original: 0 exactly, no samples
+    /// needed (a scene of many small meshes kept whole spent most of its
+    /// time measuring them against themselves).
+    fn exact_zero(&self) -> ErrorReport {
+        let d = Distance {
+            max: 0.0,
+            mean: 0.0,
+            rms: 0.0,
+            samples: 0,
+        };
+        ErrorReport {
+            a_to_b: d,
+            b_to_a: d,
+            diagonal: self.diagonal,
+        }
+    }
+
     /// The error of `m`, the mesh after `k` splits.
     pub(super) fn measure(
         &self,
@@ -94,6 +111,11 @@ impl<'a> Measurer<'a> {
         let Some(reference) = &self.reference else {
             return Ok(self.estimate(k));
         };
+        if k >= self.pm.splits.len() {
+            // every split applied: the level is the original itself (a
+            // mesh below --min-triangles, a level at 100 %), its error 0
+            return Ok(self.exact_zero());
+        }
         let t = Instant::now();
         let r = reference
             .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
