@@ -328,9 +328,7 @@ fn quantized_attributes_use_compact_formats() {
             quantize,
             compression,
         };
-        let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
-        publish_summary("q-attributes", &summary);
-        let (json, _) = load_raw(&path);
+        let (json, _, _) = write_and_load(&path, &scene, &lod, &opts, "q-attributes");
         let prim = &json["meshes"][0]["primitives"][0]["attributes"];
         let format = |a: &str| {
             let acc = &json["accessors"][prim[a].as_u64().unwrap() as usize];

@@ -59,32 +59,17 @@ fn gltf_scene() -> (Scene, LodMesh) {
         ],
         "buffers": [{"byteLength": 112}]
     });
-    let doc: gltf_json::Root = serde_json::from_value(json.clone()).unwrap();
     let mut data = vec![0u8; 4];
     data.extend_from_slice(&PNG_2X2);
     data.resize(80, 0);
     for v in KEYS.iter().chain(TRANSLATIONS.iter().flatten()) {
         data.extend_from_slice(&v.to_le_bytes());
     }
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "sphere".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: vec![Material {
-            name: "tex".into(),
-            base_color: None,
-        }],
-        origin: Origin::Gltf {
-            path: "in.gltf".into(),
-            document: Box::new(doc),
-            json: Box::new(json),
-            buffers: vec![data],
-        },
-        warnings: Vec::new(),
-    };
-    let lod = chain("sphere", 0, prim, &[0.4, 0.1]);
-    (scene, lod)
+    let materials = vec![Material {
+        name: "tex".into(),
+        base_color: None,
+    }];
+    gltf_origin_chain("sphere", prim, materials, json, data)
 }
 
 #[test]
@@ -92,15 +77,8 @@ fn gltf_origin_keeps_hierarchy_materials_and_images() {
     let (scene, lod) = gltf_scene();
     let dir = scratch("origin");
     let path = dir.join("scene.glb");
-    let summary = write_lods(
-        &path,
-        &scene,
-        std::slice::from_ref(&lod),
-        &WriteOptions::default(),
-    )
-    .unwrap();
-    publish_summary("gltf_origin", &summary);
-    let (json, buffers) = load_raw(&path);
+    let (json, buffers, summary) =
+        write_and_load(&path, &scene, &lod, &WriteOptions::default(), "gltf_origin");
     assert_eq!(json["asset"]["copyright"], "test");
     let nodes = json["nodes"].as_array().unwrap();
     assert_eq!(nodes[0]["name"], "Parent");
@@ -220,9 +198,7 @@ fn quantized_gltf_origin_puts_lods_on_a_child() {
         quantize: true,
         compression: Compression::None,
     };
-    let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
-    publish_summary("gltf_origin_quantized", &summary);
-    let (json, _) = load_raw(&path);
+    let (json, _, _) = write_and_load(&path, &scene, &lod, &opts, "gltf_origin_quantized");
     let nodes = json["nodes"].as_array().unwrap();
     assert!(nodes[1].get("mesh").is_none());
     assert_eq!(nodes[1]["children"], serde_json::json!([2]));
@@ -285,24 +261,9 @@ fn skinned_scene() -> (Scene, LodMesh) {
         "bufferViews": [{"buffer": 0, "byteLength": 128}],
         "buffers": [{"byteLength": 128}]
     });
-    let doc: gltf_json::Root = serde_json::from_value(json.clone()).unwrap();
     let data: Vec<u8> = IBM.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "skinned".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: Vec::new(),
-        origin: Origin::Gltf {
-            path: "in.gltf".into(),
-            document: Box::new(doc),
-            json: Box::new(json),
-            buffers: vec![data],
-        },
-        warnings: Vec::new(),
-    };
-    let lod = chain("skinned", 0, prim, &[0.4, 0.1]);
-    (scene, lod)
+    let materials = Vec::new();
+    gltf_origin_chain("skinned", prim, materials, json, data)
 }
 
 #[test]
@@ -310,15 +271,13 @@ fn skins_survive_on_every_lod_node_unless_quantized() {
     let (scene, lod) = skinned_scene();
     let dir = scratch("skinned");
     let path = dir.join("skinned.glb");
-    let summary = write_lods(
+    let (json, buffers, _) = write_and_load(
         &path,
         &scene,
-        std::slice::from_ref(&lod),
+        &lod,
         &WriteOptions::default(),
-    )
-    .unwrap();
-    publish_summary("gltf_skinned", &summary);
-    let (json, buffers) = load_raw(&path);
+        "gltf_skinned",
+    );
     let skin = &json["skins"][0];
     assert_eq!(skin["joints"], serde_json::json!([0, 1]));
     let ibm = accessor_values(
@@ -362,4 +321,32 @@ fn skins_survive_on_every_lod_node_unless_quantized() {
         .unwrap()
         .iter()
         .all(|n| n.get("skin").is_none()));
+}
+
+/// A one-mesh scene read from `in.gltf` (its JSON `json`, one buffer
+/// `data`) and the mesh's chain at 40 % and 10 %.
+fn gltf_origin_chain(
+    name: &str,
+    prim: Primitive,
+    materials: Vec<Material>,
+    json: serde_json::Value,
+    data: Vec<u8>,
+) -> (Scene, LodMesh) {
+    let doc: gltf_json::Root = serde_json::from_value(json.clone()).unwrap();
+    let scene = Scene {
+        meshes: vec![SourceMesh {
+            name: name.into(),
+            primitives: vec![prim.clone()],
+        }],
+        materials,
+        origin: Origin::Gltf {
+            path: "in.gltf".into(),
+            document: Box::new(doc),
+            json: Box::new(json),
+            buffers: vec![data],
+        },
+        warnings: Vec::new(),
+    };
+    let lod = chain(name, 0, prim, &[0.4, 0.1]);
+    (scene, lod)
 }

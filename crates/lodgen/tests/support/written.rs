@@ -6,8 +6,8 @@
 use std::path::Path;
 
 use lodgen::coverage::assign_screen_coverages;
-use lodgen::gltf_out::WriteSummary;
-use lodgen::scene::{LodLevel, LodMesh, Primitive};
+use lodgen::gltf_out::{write_lods, WriteOptions, WriteSummary};
+use lodgen::scene::{LodLevel, LodMesh, Primitive, Scene};
 use serde_json::Value;
 
 /// An icosphere of radius `r` around `center`, subdivided `n` times
@@ -107,6 +107,22 @@ pub fn scratch(test: &str) -> Scratch {
             .tempdir()
             .unwrap(),
     )
+}
+
+/// Writes `scene` with its one chain `lod` at `path`, publishes the summary
+/// as `name` ([`publish_summary`]) and returns what was written
+/// ([`load_raw`]) with the summary.
+pub fn write_and_load(
+    path: &Path,
+    scene: &Scene,
+    lod: &LodMesh,
+    opts: &WriteOptions,
+    name: &str,
+) -> (Value, Vec<Vec<u8>>, WriteSummary) {
+    let summary = write_lods(path, scene, std::slice::from_ref(lod), opts).unwrap();
+    publish_summary(name, &summary);
+    let (json, buffers) = load_raw(path);
+    (json, buffers, summary)
 }
 
 /// Copies every written file into `$LODGEN_TEST_OUT/<prefix>/` when set.
