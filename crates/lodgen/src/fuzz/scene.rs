@@ -8,6 +8,7 @@
 //! animation of a joint's translation, the morph weights and (by
 //! `KHR_animation_pointer`) the material's colour.
 
+use crate::io::encode_base64;
 use serde_json::{json, Value};
 
 /// A 2×2 RGB PNG.
@@ -17,27 +18,6 @@ const PNG_2X2: [u8; 75] = [
     194, 12, 255, 65, 0, 0, 38, 232, 6, 250, 18, 64, 95, 204, 0, 0, 0, 0, 73, 69, 78, 68, 174, 66,
     96, 130,
 ];
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            chunk.get(1).copied().unwrap_or(0),
-            chunk.get(2).copied().unwrap_or(0),
-        ];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for k in 0..4 {
-            out.push(if k <= chunk.len() {
-                A[(n >> (18 - 6 * k) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
-}
 
 /// One buffer with a view and an accessor per array.
 #[derive(Default)]
@@ -225,9 +205,9 @@ pub(super) fn scene_gltf() -> Vec<u8> {
         }],
         "textures": [{"source": 0, "sampler": 0}],
         "samplers": [{"magFilter": 9728}],
-        "images": [{"uri": format!("data:image/png;base64,{}", base64(&PNG_2X2))}],
+        "images": [{"uri": format!("data:image/png;base64,{}", encode_base64(&PNG_2X2))}],
         "buffers": [{"byteLength": d.bin.len(),
-                     "uri": format!("data:application/octet-stream;base64,{}", base64(&d.bin))}],
+                     "uri": format!("data:application/octet-stream;base64,{}", encode_base64(&d.bin))}],
         "bufferViews": d.views,
         "accessors": d.accessors
     });

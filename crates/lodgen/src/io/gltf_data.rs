@@ -83,6 +83,28 @@ pub(super) fn fan_to_list(v: &[u32]) -> Vec<u32> {
     out
 }
 
+/// Standard base64 with padding (for `data:` URIs).
+pub fn encode_base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for k in 0..4 {
+            out.push(if k <= chunk.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
 /// Standard base64 (padding optional); `None` on any invalid character.
 pub(crate) fn decode_base64(s: &str) -> Option<Vec<u8>> {
     let s = s.trim_end_matches('=');
@@ -137,6 +159,10 @@ mod tests {
         assert_eq!(decode_base64("TWE=").as_deref(), Some(&b"Ma"[..]));
         assert_eq!(decode_base64("TQ==").as_deref(), Some(&b"M"[..]));
         assert_eq!(decode_base64("T!=="), None);
+        for s in [&b"Man"[..], b"Ma", b"M", b"", b"\x00\xff\x10lodgen"] {
+            assert_eq!(decode_base64(&encode_base64(s)).as_deref(), Some(s));
+        }
+        assert_eq!(encode_base64(b"Ma"), "TWE=");
     }
 
     #[test]

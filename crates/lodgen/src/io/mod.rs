@@ -32,6 +32,7 @@ mod smf;
 pub use common::{ReadOptions, DECODED_BYTES_FLOOR, DECODED_BYTES_PER_INPUT_BYTE};
 pub use error::{ErrorKind, Location, ReadError};
 pub(crate) use gltf_data::decode_base64;
+pub use gltf_data::encode_base64;
 pub use gltf_in::{read_gltf, read_gltf_with};
 pub use obj::{read_obj, read_obj_with_materials};
 pub use ply::read_ply;
