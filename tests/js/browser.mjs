@@ -51,7 +51,9 @@ export async function launch(pageErrors, { viewport = { width: 640, height: 480 
     if (msg.type() === 'warning' && text.includes('GL Driver Message')) return; // SwiftShader chatter
     if (msg.type() === 'error') pageErrors.push(`console error: ${text}`);
   });
-  page.on('requestfailed', (req) => pageErrors.push(`request failed: ${req.url()} ${req.headers().range || ''} (${req.failure()?.errorText})`));
+  // net::ERR_ABORTED is the page cancelling its own request (a navigation
+  // or a reader let go while a range was in flight), not a failed one
+  page.on('requestfailed', (req) => req.failure()?.errorText === 'net::ERR_ABORTED' || pageErrors.push(`request failed: ${req.url()} ${req.headers().range || ''} (${req.failure()?.errorText})`));
   page.on('response', (res) => {
     if (res.status() >= 400) pageErrors.push(`HTTP ${res.status()} for ${res.url()}`);
   });
