@@ -148,6 +148,54 @@ fn replay_restores_wedges_exactly() {
     }
 }
 
+/// Every corner's wedge at every split count, and the fully refined
+/// corners checked against the input's (`idx`, one wedge id per corner).
+fn wedge_states(out: &Simplified, idx: &[u32]) -> Vec<Vec<[u32; 3]>> {
+    let pm = &out.pm;
+    let mut c = pm.cursor();
+    let mut states = Vec::new();
+    for k in 0..=pm.len() {
+        c.seek(k);
+        states.push(c.wedges().unwrap().to_vec());
+    }
+    for (t, w) in states[pm.len()].iter().enumerate() {
+        let input = out.triangle_map[pm.triangle_origin[t] as usize] as usize;
+        assert_eq!(*w, [idx[3 * input], idx[3 * input + 1], idx[3 * input + 2]]);
+    }
+    // coarsening one split at a time retraces refining
+    for k in (0..=pm.len()).rev() {
+        c.seek(k);
+        assert_eq!(c.wedges().unwrap(), &states[k][..], "at {k}");
+    }
+    states
+}
+
+#[test]
+fn one_wedge_per_vertex_is_stored_per_vertex_and_replays_exactly() {
+    // no seam: each vertex keeps one wedge at every step, and the log holds
+    // one wedge per vertex instead of every split's edits
+    let m = shapes::torus(1.0, 0.3, 40, 24);
+    let idx = m.indices();
+    let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.05);
+    let out = simplify_with_wedges(&m.positions, &idx, &[], 0, &opts).unwrap();
+    let log = out.pm.wedges.as_ref().unwrap();
+    assert!(log.per_vertex.is_some() && log.splits.is_empty());
+    let states = wedge_states(&out, &idx);
+    // the same log with every split's edits written out replays the same
+    let mut explicit = out.clone();
+    let splits = (out.pm.splits.iter().enumerate())
+        .map(|(i, s)| log.split(i, s).into_owned())
+        .collect();
+    let w = explicit.pm.wedges.as_mut().unwrap();
+    (w.splits, w.per_vertex) = (splits, None);
+    assert_eq!(wedge_states(&explicit, &idx), states);
+    // a seam: explicit edits
+    let (pos, idx, _) = seamed_grid();
+    let out = simplify_with_wedges(&pos, &idx, &[], 0, &SimplifyOptions::DEFAULT).unwrap();
+    assert!(out.pm.wedges.as_ref().unwrap().per_vertex.is_none());
+    wedge_states(&out, &idx);
+}
+
 #[test]
 fn explicit_feature_edges_hold_a_crease() {
     // a flat grid with a declared hard edge along y = 0.5

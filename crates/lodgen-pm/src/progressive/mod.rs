@@ -29,6 +29,9 @@ pub mod attrfit;
 pub mod levels;
 #[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
+mod wedgelog;
+
+pub use wedgelog::{SplitWedges, WedgeLog};
 
 use crate::mesh::Mesh;
 use crate::util::prefetch;
@@ -92,27 +95,6 @@ pub struct ProgressiveMesh {
     /// Every corner's wedge at every step, when the simplifier tracked
     /// wedges (`Simplifier::set_wedges`); `None` on the position-only path.
     pub wedges: Option<WedgeLog>,
-}
-
-/// The wedge payload of the log, parallel to the geometry: the caller's
-/// attribute ids per corner, so a replay restores attributes exactly by
-/// looking them up.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct WedgeLog {
-    /// The wedges of `base.triangles`, corner by corner.
-    pub base: Vec<[u32; 3]>,
-    /// Parallel to `ProgressiveMesh::splits`.
-    pub splits: Vec<SplitWedges>,
-}
-
-/// The wedge edits of one vertex split.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SplitWedges {
-    /// The wedges of the split's `faces`.
-    pub faces: SmallVec<[[u32; 3]; 2]>,
-    /// Parallel to the split's `corners`: `[wedge before the split (the
-    /// collapsed state), wedge after it]`.
-    pub corners: Vec<[u32; 2]>,
 }
 
 /// A contraction as the simplifier records it, in the welded input's
@@ -300,7 +282,12 @@ impl ProgressiveMesh {
             b.prefetch_ahead(k);
             (&records[n - 1 - k], &p_merged[k])
         };
-        let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if wedges.is_some() {
+        // one wedge per vertex (no seam, no attribute): the per-split
+        // edits follow from it and are not stored (wedgelog.rs)
+        let per_vertex =
+            wedges.and_then(|w| wedgelog::one_per_vertex(triangles, w, log, vertex_alive.len()));
+        let explicit = wedges.is_some() && per_vertex.is_none();
+        let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if explicit {
             (0..n)
                 .into_par_iter()
                 .map_init(Vec::new, |buf, k| {
@@ -323,6 +310,9 @@ impl ProgressiveMesh {
                 .map(|&t| w[t as usize])
                 .collect(),
             splits: split_wedges,
+            per_vertex: per_vertex
+                .as_ref()
+                .map(|w| vertex_origin.iter().map(|&v| w[v as usize]).collect()),
         });
         ProgressiveMesh {
             base,
@@ -444,14 +434,8 @@ impl<'a> Cursor<'a> {
         let end = (self.applied + n).min(self.pm.splits.len());
         let done = end - self.applied;
         if let (Some(cw), Some(log)) = (self.wedges.as_mut(), self.pm.wedges.as_ref()) {
-            for (s, w) in self.pm.splits[self.applied..end]
-                .iter()
-                .zip(&log.splits[self.applied..end])
-            {
-                cw.extend_from_slice(&w.faces);
-                for (c, e) in s.corners.iter().zip(&w.corners) {
-                    cw[c.triangle as usize][c.slot as usize] = e[1];
-                }
+            for i in self.applied..end {
+                log.refine(cw, i, &self.pm.splits[i]);
             }
         }
         for s in &self.pm.splits[self.applied..end] {
@@ -474,15 +458,8 @@ impl<'a> Cursor<'a> {
         let start = self.applied.saturating_sub(n);
         let done = self.applied - start;
         if let (Some(cw), Some(log)) = (self.wedges.as_mut(), self.pm.wedges.as_ref()) {
-            for (s, w) in self.pm.splits[start..self.applied]
-                .iter()
-                .zip(&log.splits[start..self.applied])
-                .rev()
-            {
-                for (c, e) in s.corners.iter().zip(&w.corners) {
-                    cw[c.triangle as usize][c.slot as usize] = e[0];
-                }
-                cw.truncate(cw.len() - w.faces.len());
+            for i in (start..self.applied).rev() {
+                log.coarsen(cw, i, &self.pm.splits[i]);
             }
         }
         for s in self.pm.splits[start..self.applied].iter().rev() {

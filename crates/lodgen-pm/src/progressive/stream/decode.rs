@@ -575,6 +575,7 @@ impl StreamDecoder {
             wedges: h.wedges.as_ref().map(|_| WedgeLog {
                 base: self.base_wedges,
                 splits: self.split_wedges,
+                per_vertex: None,
             }),
         };
         Ok(Decoded {

@@ -34,19 +34,9 @@ pub fn encode_with_attributes(
 ) -> Result<Vec<u8>, EncodeError> {
     let log = pm.wedges.as_ref().ok_or(EncodeError::NoWedges)?;
     attributes.check()?;
-    let used = log
-        .base
-        .iter()
-        .flatten()
-        .chain(log.splits.iter().flat_map(|s| {
-            s.faces
-                .iter()
-                .flatten()
-                .chain(s.corners.iter().map(|c| &c[1]))
-        }));
     let mut seen = vec![false; attributes.count];
     let mut total = 0usize;
-    for &w in used {
+    let mut mark = |w: u32| {
         let slot = seen
             .get_mut(w as usize)
             .ok_or(EncodeError::WedgeOutOfRange {
@@ -57,6 +47,13 @@ pub fn encode_with_attributes(
             *slot = true;
             total += 1;
         }
+        Ok::<(), EncodeError>(())
+    };
+    log.base.iter().flatten().try_for_each(|&w| mark(w))?;
+    for (i, s) in pm.splits.iter().enumerate() {
+        let e = log.split(i, s);
+        e.faces.iter().flatten().try_for_each(|&w| mark(w))?;
+        e.corners.iter().try_for_each(|c| mark(c[1]))?;
     }
     Ok(encode_inner(
         pm,
@@ -284,7 +281,7 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
         }
     }
     if let Some((log, w)) = &mut st.wedges {
-        let sw = &log.splits[i];
+        let sw = log.split(i, s);
         let first = st.triangles.len() - nf;
         let rec = Rec {
             v0,
