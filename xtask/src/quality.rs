@@ -19,8 +19,10 @@
 //!
 //! Writes `docs/quality.md` (the table) and `docs/quality.png` (error
 //! against triangle count, one panel per mesh). `--quick`: lodgen and
-//! meshopt only, fewer samples, no big mesh, nothing written (the loop for
-//! trying a change of the simplifier). `--meshes a,b` runs a subset;
+//! meshopt only, no big mesh, nothing written (the loop for trying a change
+//! of the simplifier); when the last full run recorded the peers' cells
+//! (`target/quality-peers.tsv`), only lodgen is run and measured and its
+//! ratios are against the recorded best peer. `--meshes a,b` runs a subset;
 //! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
 //! `Schedule::Greedy` instead of its default pass schedule.
 
@@ -45,8 +47,6 @@ const MESHES: [&str; 8] = [
 const RATIOS: [f64; 3] = [0.5, 0.1, 0.02];
 /// Area samples per direction (the issue's Metro-style setting).
 const SAMPLES: usize = 1_000_000;
-/// Area samples per direction with `--quick`.
-const QUICK_SAMPLES: usize = 200_000;
 /// meshopt's `target_error` is relative to the mesh extent: 1.0 never binds.
 const MESHOPT_NO_ERROR_BOUND: f32 = 1.0;
 /// The Python peers: (label, module to import, pip package).
@@ -56,6 +56,10 @@ const PEERS: [(&str, &str, &str); 4] = [
     ("pyfqmr", "pyfqmr", "pyfqmr"),
     ("fast-simpl.", "fast_simplification", "fast-simplification"),
 ];
+/// The peers' cells of the last full run, for `--quick`: one line per cell,
+/// `mesh ratio peer triangles hausdorff rms`, tab-separated (peer: index in
+/// `Row::peers`, 0 = meshopt).
+const RECORDED: &str = "target/quality-peers.tsv";
 const PLOT_PANEL: (u32, u32) = (420, 330);
 const DEFAULT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
@@ -364,11 +368,16 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     let args = parse(args)?;
     let assets = crate::shared_assets()?;
-    let samples = if args.quick { QUICK_SAMPLES } else { SAMPLES };
+    let samples = SAMPLES;
     let mopts = MeasureOptions::DEFAULT
         .with_samples_per_triangle(0.0)
         .with_min_samples(samples);
     let python = if args.python { peer_python()? } else { None };
+    let recorded = if python.is_none() {
+        read_recorded()?
+    } else {
+        Vec::new()
+    };
     let mut rows = Vec::new();
     for &name in &args.meshes {
         let m = input(&assets, name)?;
@@ -381,15 +390,32 @@ pub fn run(args: &[String]) -> Result<()> {
         }
         for (k, level) in levels.iter().enumerate() {
             let lodgen = measure_cell(&reference, level, &mopts)?;
-            let mut cells = vec![Some(measure_cell(
-                &reference,
-                &meshopt_level(&m, counts[k])?,
-                &mopts,
-            )?)];
-            for p in &peers {
+            let recorded_cell = |i: usize| {
+                let c = recorded
+                    .iter()
+                    .find(|r| r.0 == name && r.1 == RATIOS[k] && r.2 == i)
+                    .map(|r| r.3)?;
+                if c.triangles.abs_diff(counts[k]) * 100 > counts[k] {
+                    eprintln!(
+                        "quality: notice: {name} {}: a peer was recorded at {} triangles, \
+                         lodgen has {} (a full run records the peers again)",
+                        RATIOS[k], c.triangles, counts[k]
+                    );
+                }
+                Some(c)
+            };
+            let mut cells = vec![match recorded_cell(0) {
+                Some(c) => Some(c),
+                None => Some(measure_cell(
+                    &reference,
+                    &meshopt_level(&m, counts[k])?,
+                    &mopts,
+                )?),
+            }];
+            for (i, p) in peers.iter().enumerate() {
                 cells.push(match &p[k] {
                     Some(mesh) => Some(measure_cell(&reference, mesh, &mopts)?),
-                    None => None,
+                    None => recorded_cell(i + 1),
                 });
             }
             let row = Row {
@@ -409,9 +435,73 @@ pub fn run(args: &[String]) -> Result<()> {
         plot(&docs.join("quality.png"), &args.meshes, &rows)?;
         std::fs::write(docs.join("quality.md"), report(&rows, samples))
             .context("writing docs/quality.md")?;
+        if python.is_some() {
+            write_recorded(&rows)?;
+        }
         eprintln!("wrote docs/quality.md, docs/quality.png");
     }
     Ok(())
+}
+
+/// A recorded peer's cell: mesh, ratio, index in `Row::peers`, cell.
+type RecordedCell = (String, f64, usize, Cell);
+
+/// Records the peers' cells of a full run for `--quick` (replacing
+/// the recorded cells of the meshes it ran, keeping the others).
+fn write_recorded(rows: &[Row]) -> Result<()> {
+    let mut s = String::new();
+    for (mesh, ratio, i, c) in read_recorded()? {
+        if rows.iter().all(|r| r.mesh != mesh) {
+            let _ = writeln!(
+                s,
+                "{mesh}\t{ratio}\t{i}\t{}\t{}\t{}",
+                c.triangles, c.hausdorff, c.rms
+            );
+        }
+    }
+    for row in rows {
+        for (i, c) in row.peers.iter().enumerate() {
+            if let Some(c) = c {
+                let _ = writeln!(
+                    s,
+                    "{}\t{}\t{i}\t{}\t{}\t{}",
+                    row.mesh, row.ratio, c.triangles, c.hausdorff, c.rms
+                );
+            }
+        }
+    }
+    let path = crate::workspace_root().join(RECORDED);
+    std::fs::write(&path, s).with_context(|| format!("writing {}", path.display()))
+}
+
+/// The cells [`write_recorded`] wrote (none when there is no file).
+fn read_recorded() -> Result<Vec<RecordedCell>> {
+    let path = crate::workspace_root().join(RECORDED);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(Vec::new());
+    };
+    eprintln!(
+        "quality: the peers' cells are the ones recorded in {} (lodgen's alone are measured)",
+        path.display()
+    );
+    text.lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            let bad = || format!("{}: bad line {l:?}", path.display());
+            anyhow::ensure!(f.len() == 6, bad());
+            let num = |i: usize| f[i].parse::<f64>().with_context(bad);
+            Ok((
+                f[0].to_string(),
+                num(1)?,
+                f[2].parse().with_context(bad)?,
+                Cell {
+                    triangles: f[3].parse().with_context(bad)?,
+                    hausdorff: num(4)?,
+                    rms: num(5)?,
+                },
+            ))
+        })
+        .collect()
 }
 
 /// Peer labels, in `Row::peers` order.
