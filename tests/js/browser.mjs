@@ -67,27 +67,60 @@ export async function launch(pageErrors, { viewport = { width: 640, height: 480 
 /**
  * Serve `routes` ({path: {type, body}}) on 127.0.0.1 (a free port) with
  * single-range support. With `throttle` ({bitsPerSecond, latencyMs}) every
- * response waits `latencyMs`, then its body is sent at `bitsPerSecond`,
- * responses sharing the link one after another (as on one slow line).
- * Each request is logged into `requests`.
+ * response waits `latencyMs` after its request, then its body goes out in
+ * slices at `bitsPerSecond` (a client reading the body as it arrives sees
+ * the bytes come in), responses sharing the link one after another (as on
+ * one slow line); a response the client closes early stops there and frees
+ * the line. Each request is logged into `requests`, with `sent`: the body
+ * bytes written before the end or the client's close.
  */
 export function startServer(routes, requests = [], throttle = null) {
-  let lineFree = 0; // time the simulated line is free again
-  const send = (res, status, headers, body) => {
+  const queue = []; // throttled responses waiting for the line
+  let busy = false;
+  const SLICE = 8192;
+  const serveNext = () => {
+    if (busy || !queue.length) return;
+    busy = true;
+    const { res, status, headers, body, log, ready } = queue.shift();
+    let closed = false;
+    res.on('close', () => { closed = true; });
+    const begin = () => {
+      if (closed) { busy = false; serveNext(); return; }
+      res.writeHead(status, headers);
+      const bytes = body ? body.length : 0;
+      const t0 = Date.now();
+      let pos = 0;
+      const step = () => {
+        if (closed || pos >= bytes) {
+          if (!closed) res.end();
+          busy = false;
+          serveNext();
+          return;
+        }
+        const n = Math.min(SLICE, bytes - pos);
+        res.write(body.subarray(pos, pos + n));
+        pos += n;
+        log.sent = pos;
+        // the slice's last byte leaves the line at t0 + pos bits / rate
+        setTimeout(step, Math.max(0, t0 + (pos * 8 * 1000) / throttle.bitsPerSecond - Date.now()));
+      };
+      step();
+    };
+    setTimeout(begin, Math.max(0, ready - Date.now()));
+  };
+  const send = (res, status, headers, body, log) => {
     if (!throttle) {
+      log.sent = body ? body.length : 0;
       res.writeHead(status, headers).end(body);
       return;
     }
-    const bytes = body ? body.length : 0;
-    const start = Math.max(Date.now() + throttle.latencyMs, lineFree);
-    const done = start + (bytes * 8 * 1000) / throttle.bitsPerSecond;
-    lineFree = done;
-    setTimeout(() => res.writeHead(status, headers).end(body), Math.max(0, done - Date.now()));
+    queue.push({ res, status, headers, body, log, ready: Date.now() + throttle.latencyMs });
+    serveNext();
   };
   const server = http.createServer((req, res) => {
     const u = new URL(req.url, 'http://127.0.0.1');
     const route = routes[u.pathname];
-    const log = { method: req.method, path: u.pathname, range: req.headers.range ?? null, status: 0, t: Date.now() };
+    const log = { method: req.method, path: u.pathname, range: req.headers.range ?? null, status: 0, sent: 0, t: Date.now() };
     requests.push(log);
     if (!route) {
       log.status = u.pathname === '/favicon.ico' ? 204 : 404;
@@ -114,11 +147,11 @@ export function startServer(routes, requests = [], throttle = null) {
       }
       log.status = 206;
       const part = req.method === 'HEAD' ? undefined : body.subarray(start, end + 1);
-      send(res, 206, { ...headers, 'Content-Range': `bytes ${start}-${end}/${body.length}`, 'Content-Length': end - start + 1 }, part);
+      send(res, 206, { ...headers, 'Content-Range': `bytes ${start}-${end}/${body.length}`, 'Content-Length': end - start + 1 }, part, log);
       return;
     }
     log.status = 200;
-    send(res, 200, { ...headers, 'Content-Length': body.length }, req.method === 'HEAD' ? undefined : body);
+    send(res, 200, { ...headers, 'Content-Length': body.length }, req.method === 'HEAD' ? undefined : body, log);
   });
   return new Promise((resolve, reject) => {
     server.once('error', reject);

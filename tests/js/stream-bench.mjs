@@ -3,7 +3,7 @@
 // Chromium with three.js (what `cargo xtask stream-bench` runs).
 //
 //   node stream-bench.mjs --progressive P.glb --plain F.glb [--name NAME]
-//        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json]
+//        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json] [--timeline]
 //
 // The local server sends every response after `latency-ms`, at `mbit`
 // Mbit/s, responses one after another on the one simulated line. The page
@@ -33,6 +33,7 @@ function parseArgs(argv) {
     else if (a === '--latency-ms') o.latency = Number(v());
     else if (a === '--runs') o.runs = Number(v());
     else if (a === '--json') o.json = v();
+    else if (a === '--timeline') o.timeline = true;
     else { console.error(`stream-bench.mjs: unknown argument ${a}`); process.exit(2); }
   }
   if (!o.progressive || !o.plain) { console.error('stream-bench.mjs: needs --progressive P.glb --plain F.glb'); process.exit(2); }
@@ -66,15 +67,18 @@ async function main() {
     for (let r = 0; r < o.runs; r++) {
       const plain = await page.evaluate((u) => window.runPlain(u), `${base}/plain.glb`);
       requests.length = 0;
-      const prog = await page.evaluate((u) => window.runProgressive(u), `${base}/progressive.glb`);
-      const bytes = requests.filter((q) => q.path === '/progressive.glb').length;
+      const prog = await page.evaluate((u) => window.runProgressive(u, { hash: false }), `${base}/progressive.glb`);
+      const mine = requests.filter((q) => q.path === '/progressive.glb');
+      const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
       runs.plain.push(plain.t);
-      runs.first.push(prog.events[0].t);
+      runs.first.push(prog.firstPixel.t);
       runs.full.push(prog.events[prog.events.length - 1].t);
       runs.bytes.push(bytes);
       console.log(`run ${r + 1}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive first pixel ` +
-        `${prog.events[0].t.toFixed(0)} ms (${prog.events[0].drawn} triangles), full ${prog.events[prog.events.length - 1].t.toFixed(0)} ms ` +
-        `(${prog.events[prog.events.length - 1].drawn} triangles, ${bytes} requests)`);
+        `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${prog.events[prog.events.length - 1].t.toFixed(0)} ms ` +
+        `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent)`);
+      if (o.timeline) console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
+        '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', '));
       if (prog.events[prog.events.length - 1].drawn !== plain.drawn) errors.push(`full detail draws ${prog.events[prog.events.length - 1].drawn} triangles, plain ${plain.drawn}`);
     }
   } finally {

@@ -67,25 +67,26 @@ function clear() {
 const t0 = () => performance.now();
 
 // Progressive: level events with drawn triangles, hash, pixels; timings.
-window.runProgressive = async (url, { stopAt = 0, keep = false } = {}) => {
+window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
   const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: stopAt });
   scene.add(p.gltf.scene);
   frame(p.gltf.scene);
+  // first pixel: the coarse level as GLTFLoader parsed it
+  const first = draw();
+  const firstPixel = { drawn: first.triangles, variance: first.variance, t: t0() - start };
   const events = [];
-  const record = (e) => {
+  p.addEventListener('level', (e) => {
     const d = draw();
     const t = t0() - start; // drawn (the hash below is the check's, not the loader's)
     events.push({ level: e.level, records: e.records, triangles: e.triangles, drawn: d.triangles, variance: d.variance,
-      hash: indexHash(p.geometry), t });
-  };
-  record({ level: p.levels.length - 1, records: 0, triangles: p.nt });
-  p.addEventListener('level', (e) => { if (e.records > 0) record(e); });
+      hash: hash ? indexHash(p.geometry) : 0, t });
+  });
   await p.refine(stopAt);
   if (keep) window.progressive = p;
-  return { events, coarseTriangles: p.coarseTriangles, quantized: p.quantized };
+  return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized };
 };
 
 // Plain GLTFLoader (+ MeshoptDecoder): time until the full mesh is drawn.

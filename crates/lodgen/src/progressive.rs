@@ -469,10 +469,79 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ProgressiveError> {
         })
 }
 
+/// The byte ranges in buffer 0 of bufferView `v`'s data: its own and, with
+/// `EXT_meshopt_compression`, its compressed data's, as JSON pointers to
+/// their `byteOffset` with `(offset, length)`.
+fn buffer0_ranges(root: &Value, v: usize) -> Vec<(String, usize, usize)> {
+    let at = |p: String| {
+        let o = root.pointer(&p)?;
+        let len = o.get("byteLength")?.as_u64()? as usize;
+        let off = o.get("byteOffset").map_or(Some(0), Value::as_u64)? as usize;
+        (o.get("buffer")?.as_u64()? == 0).then_some((format!("{p}/byteOffset"), off, len))
+    };
+    let view = format!("/bufferViews/{v}");
+    let mo = format!("{view}/extensions/EXT_meshopt_compression");
+    [at(view), at(mo)].into_iter().flatten().collect()
+}
+
+/// Move the stream of buffer view `view` (appended at the end of the GLB
+/// binary chunk `bin`) to right after the data of `mesh` (the coarsest
+/// level), shifting the data behind it: a client reading the file from its
+/// start gets the JSON, the coarsest level and the stream, in that order.
+/// Left at the end when a range of buffer 0 straddles that point.
+fn hoist_stream(root: &mut Value, bin: &mut Vec<u8>, view: usize, mesh: usize) {
+    let views = root["bufferViews"].as_array().map_or(0, Vec::len);
+    let accessor_view = |a: &Value| {
+        let i = a.as_u64()? as usize;
+        root.pointer(&format!("/accessors/{i}/bufferView"))?
+            .as_u64()
+    };
+    let mut mesh_views: Vec<usize> = Vec::new();
+    for prim in root["meshes"][mesh]["primitives"]
+        .as_array()
+        .into_iter()
+        .flatten()
+    {
+        let attrs = prim["attributes"]
+            .as_object()
+            .into_iter()
+            .flat_map(|a| a.values());
+        for a in attrs.chain(prim.get("indices")) {
+            mesh_views.extend(accessor_view(a).map(|v| v as usize));
+        }
+    }
+    let end = mesh_views.iter().flat_map(|&v| buffer0_ranges(root, v));
+    let at = end
+        .map(|(_, o, l)| o + l)
+        .max()
+        .unwrap_or(0)
+        .next_multiple_of(4);
+    let Some((ptr, off, len)) = buffer0_ranges(root, view).into_iter().next() else {
+        return;
+    };
+    let others: Vec<_> = (0..views)
+        .filter(|&v| v != view)
+        .flat_map(|v| buffer0_ranges(root, v))
+        .collect();
+    if at >= off || others.iter().any(|&(_, o, l)| o < at && at < o + l) {
+        return;
+    }
+    let shift = len.next_multiple_of(4);
+    let stream: Vec<u8> = bin[off..off + len].to_vec();
+    bin.copy_within(at..off, at + shift);
+    bin[at..at + len].copy_from_slice(&stream);
+    bin[at + len..at + shift].fill(0);
+    for (p, o, _) in others.into_iter().filter(|&(_, o, _)| o >= at) {
+        *root.pointer_mut(&p).expect("found above") = (o + shift).into();
+    }
+    *root.pointer_mut(&ptr).expect("found above") = at.into();
+}
+
 /// Add `LODGEN_progressive` to a `.glb` / `.gltf` the glTF writer has just
 /// written: each chain's stream goes on primitive 0 of its coarsest level's
-/// mesh (`{name}_LOD{levels.len() - 1}`), at the end of the GLB binary chunk,
-/// or for `.gltf` in `STEM.stream.bin` (`STEM.streamI.bin` when several
+/// mesh (`{name}_LOD{levels.len() - 1}`), in the GLB binary chunk right
+/// after that mesh's data (before the finer levels'), or for `.gltf` in
+/// `STEM.stream.bin` (`STEM.streamI.bin` when several
 /// meshes carry one). Files are replaced atomically; the result is a pure
 /// function of the inputs. A chain whose coarsest mesh is not found is an
 /// error (nothing is written).
@@ -523,7 +592,10 @@ pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError
             files.push((path.with_file_name(&name), c.stream.clone()));
             Placement::External { uri }
         };
-        attach(&mut root, mesh, 0, &c.stream, &c.levels, placement)?;
+        let view = attach(&mut root, mesh, 0, &c.stream, &c.levels, placement)?;
+        if glb {
+            hoist_stream(&mut root, &mut bin, view, mesh);
+        }
     }
     for (p, data) in &files {
         write_atomically(p, data)?;
@@ -598,6 +670,51 @@ mod tests {
         assert_eq!(f.levels, levels);
         assert_eq!(f.lod_meshes, vec![0, 1]);
         assert_eq!(f.screen_coverage, vec![0.5, 0.01]);
+    }
+
+    #[test]
+    fn the_stream_moves_to_right_after_the_coarsest_level() {
+        let (s, levels) = stream();
+        let mut root = doc();
+        root["accessors"] = json!([{"bufferView": 0}, {"bufferView": 1}]);
+        root["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 1.into();
+        root["bufferViews"] = json!([{"buffer": 0, "byteLength": 6},
+            {"buffer": 0, "byteOffset": 8, "byteLength": 8}]);
+        let mut bin = [vec![1u8; 6], vec![0; 2], vec![2u8; 8]].concat();
+        let view = attach(
+            &mut root,
+            1,
+            0,
+            &s,
+            &levels,
+            Placement::Glb { bin: &mut bin },
+        )
+        .unwrap();
+        hoist_stream(&mut root, &mut bin, view, 1);
+        let shift = s.len().div_ceil(4) * 4;
+        assert_eq!(find(&root).unwrap().unwrap().range, (0, 8, s.len()));
+        assert_eq!(&bin[8..8 + s.len()], &s[..]);
+        assert_eq!(root["bufferViews"][1]["byteOffset"], 8 + shift);
+        assert_eq!(&bin[8 + shift..], &[2u8; 8]);
+        assert_eq!(&bin[..6], &[1u8; 6]);
+        // a range across the insertion point: the stream stays at the end
+        let mut root = doc();
+        root["accessors"] = json!([{"bufferView": 0}]);
+        root["bufferViews"] = json!([{"buffer": 0, "byteLength": 6},
+            {"buffer": 0, "byteOffset": 4, "byteLength": 8}]);
+        let mut bin = vec![3u8; 12];
+        let view = attach(
+            &mut root,
+            1,
+            0,
+            &s,
+            &levels,
+            Placement::Glb { bin: &mut bin },
+        )
+        .unwrap();
+        let before = (root.clone(), bin.clone());
+        hoist_stream(&mut root, &mut bin, view, 1);
+        assert_eq!((root, bin), before);
     }
 
     #[test]

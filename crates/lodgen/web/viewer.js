@@ -44,10 +44,9 @@ class Display {
     }
   }
   refine(n) {
-    const recs = this.dec.records;
-    const end = Math.min(this.applied + n, recs.length);
+    const end = Math.min(this.applied + n, this.dec.count);
     for (let i = this.applied; i < end; i++) {
-      const r = recs[i];
+      const r = this.dec.record(i);
       this.pos.set(r.p1, 3 * r.v1);
       this.pos.set(r.p0, 3 * r.v0);
       if (this.cw) {
@@ -63,10 +62,9 @@ class Display {
     this.applied = end;
   }
   coarsen(n) {
-    const recs = this.dec.records;
     const start = Math.max(0, this.applied - n);
     for (let i = this.applied - 1; i >= start; i--) {
-      const r = recs[i];
+      const r = this.dec.record(i);
       for (const c of r.corners) this.idx[c] = r.v1;
       if (this.cw) for (let j = 0; j < r.corners.length; j++) this.cw[r.corners[j]] = r.wbefore[j];
       this.nt -= r.faces.length / 3;
@@ -77,7 +75,7 @@ class Display {
     this.applied = start;
   }
   seek(k) {
-    k = Math.max(0, Math.min(k, this.dec.records.length));
+    k = Math.max(0, Math.min(k, this.dec.count));
     if (k > this.applied) this.refine(k - this.applied);
     else this.coarsen(this.applied - k);
   }
@@ -413,10 +411,10 @@ function updatePanel() {
   $("tris").textContent = disp ? disp.nt : 0;
   $("verts").textContent = disp ? disp.nv : 0;
   $("applied").textContent = disp ? disp.applied : 0;
-  $("decoded").textContent = state.dec.records.length;
+  $("decoded").textContent = state.dec.count;
   $("bytes").textContent = state.bytes;
   const s = $("level");
-  s.max = state.dec.records.length;
+  s.max = state.dec.count;
   if (disp && Number(s.value) !== disp.applied) s.value = disp.applied;
 }
 
@@ -458,8 +456,8 @@ async function load() {
     state.bytes += bytes.length;
     state.dec.push(bytes);
     if (!state.disp && state.dec.baseReady) initMesh();
-    if (state.disp && state.follow && !state.auto) state.disp.seek(state.dec.records.length);
-    state.history.push({ bytes: state.bytes, decoded: state.dec.records.length, applied: state.disp ? state.disp.applied : -1 });
+    if (state.disp && state.follow && !state.auto) state.disp.seek(state.dec.count);
+    state.history.push({ bytes: state.bytes, decoded: state.dec.count, applied: state.disp ? state.disp.applied : -1 });
     requestFrame();
     await new Promise((r) => setTimeout(r, 0)); // let a frame show what arrived
   }
@@ -503,7 +501,7 @@ window.lodgen = {
   setShading: (name) => { const ok = setShading(SHADING.indexOf(name)); render(); return ok; },
   refineTo: (k) => { state.follow = false; setAuto(false); const a = refineTo(k); render(); return a; },
   applied: () => (state.disp ? state.disp.applied : 0),
-  decoded: () => state.dec.records.length,
+  decoded: () => state.dec.count,
   complete: () => state.dec.complete(),
   levels: () => (state.info ? state.info.levels : []),
   info: () => state.info,

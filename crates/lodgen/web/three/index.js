@@ -9,15 +9,15 @@
 //   p.addEventListener("level", (e) => render()); // e.level (finest = 0), e.triangles
 //   await p.refine();                           // or p.refine(level): stop at a level
 //
-// loadProgressive fetches, by HTTP range requests, the GLB header and JSON,
-// then only the coarsest MSFT_lod level's bytes, and lets GLTFLoader parse
-// that (a GLTFLoader plugin finds the primitive carrying LODGEN_progressive
-// and gives it a BufferGeometry sized for the finest level). `refine` then
-// fetches the stream up to the level in one range request, read as it
-// arrives: each chunk (one per level) is
-// decoded while the next downloads; each level is applied to that geometry
-// with update ranges (only the changed vertices and indices are uploaded),
-// dispatching a "level" event per level.
+// loadProgressive reads the file from its start in one request, as the
+// bytes arrive: the GLB header and JSON, the coarsest MSFT_lod level, which
+// GLTFLoader parses at once (a GLTFLoader plugin finds the primitive
+// carrying LODGEN_progressive), and, where lodgen puts it right behind, the
+// stream up to the `prefetch` level; then it lets the rest of the file go.
+// `refine` gives the mesh a BufferGeometry sized for the finest level once
+// the stream's base is in, fetches any chunk still missing in one range
+// request, and applies each level (decoded as its bytes arrive) with update
+// ranges, dispatching a "level" event per level.
 // `refineForScreen(camera, renderer)` refines to the level the file's
 // MSFT_screencoverage asks for at the object's current size on screen.
 //
@@ -70,17 +70,58 @@ async function fetchRange(url, start, end, fetchOptions) {
   return resp.status === 200 ? bytes.subarray(start, end) : bytes;
 }
 
-// GLB header + JSON: {json, binStart, binLength}, in one range request when
-// the JSON fits the first `guess` bytes.
-async function fetchGlbJson(url, fetchOptions, guess = 16384) {
-  let head = await fetchRange(url, 0, guess, fetchOptions);
+// The file read from its start in one request (`bytes=0-`), as the bytes
+// arrive: `until(n)` waits for the first n bytes (fewer at the end of the
+// file), `bytes` holds what came so far; `cancel()` lets the rest go.
+class FileStart {
+  constructor(url, fetchOptions) {
+    this.url = url;
+    this.bytes = new Uint8Array(65536);
+    this.have = 0;
+    this.done = false;
+    this.reader = fetch(url, { ...fetchOptions, headers: { Range: "bytes=0-" } }).then((resp) => {
+      if (resp.status !== 206 && resp.status !== 200) throw new Error(`${url}: HTTP ${resp.status}`);
+      return resp.body.getReader();
+    });
+  }
+  // the next piece of the body (null at its end), not kept in `bytes`
+  async next() {
+    if (this.done) return null;
+    const { done, value } = await (await this.reader).read();
+    if (done) { this.done = true; return null; }
+    return value;
+  }
+  async until(n) {
+    while (this.have < n) {
+      const v = await this.next();
+      if (!v) break;
+      if (this.have + v.length > this.bytes.length) {
+        const b = new Uint8Array(Math.max(2 * this.bytes.length, this.have + v.length));
+        b.set(this.bytes.subarray(0, this.have));
+        this.bytes = b;
+      }
+      this.bytes.set(v, this.have);
+      this.have += v.length;
+    }
+    return this.bytes.subarray(0, this.have);
+  }
+  cancel() {
+    this.done = true;
+    this.reader.then((r) => r.cancel(), () => {});
+  }
+}
+
+// GLB header + JSON from the start of the file: {json, binStart, binLength}.
+async function readGlbJson(file) {
+  const head = await file.until(20);
   const dv = new DataView(head.buffer, head.byteOffset, Math.min(head.length, 20));
-  if (head.length < 20 || dv.getUint32(0, true) !== 0x46546c67) throw new Error(`${url}: not a GLB`);
+  if (head.length < 20 || dv.getUint32(0, true) !== 0x46546c67) throw new Error(`${file.url}: not a GLB`);
   const jsonLength = dv.getUint32(12, true);
-  if (head.length < 28 + jsonLength) head = await fetchRange(url, 0, 28 + jsonLength, fetchOptions);
-  const json = JSON.parse(new TextDecoder().decode(head.subarray(20, 20 + jsonLength)));
-  const tail = new DataView(head.buffer, head.byteOffset + 20 + jsonLength, 8);
-  return { json, jsonLength, binStart: 20 + jsonLength + 8, binLength: tail.getUint32(0, true) };
+  const all = await file.until(28 + jsonLength);
+  if (all.length < 28 + jsonLength) throw new Error(`${file.url}: the GLB ends in its JSON chunk`);
+  const json = JSON.parse(new TextDecoder().decode(all.subarray(20, 20 + jsonLength)));
+  const tail = new DataView(all.buffer, all.byteOffset + 20 + jsonLength, 8);
+  return { json, binStart: 20 + jsonLength + 8, binLength: tail.getUint32(0, true) };
 }
 
 // The extension, its mesh, and the MSFT_lod chain node that shows the finest level.
@@ -187,16 +228,23 @@ export class ProgressiveMesh extends EventDispatcher {
     this.mesh = null;
     this.fetched = 0; // stream chunks decoded
     this.requested = 0; // stream chunks requested
+    this.received = 0; // stream bytes received
+    this.geometry = null; // the stream's, once its base is in
+    this.t0 = performance.now();
+    this.timeline = [];
   }
 
-  // Fetch and decode chunk 0 (header + base mesh) and set up the geometry.
+  // Once chunk 0 (header + base mesh) is decoded: set up the geometry
+  // sized for the finest level, in place of the coarse level's own.
   async start() {
+    if (this.geometry) return;
     if (!this.chunkEnds) {
       const head = await fetchRange(this.url, this.streamStart, this.streamStart + Math.min(this.streamLength, 4096), this.fetchOptions);
       this.chunkEnds = parseHeader(head).chunkEnds;
     }
     this.request(0);
     await this.waitChunks(1);
+    if (this.geometry) return;
     const d = this.decoder, h = d.header;
     const prim = this.json.meshes[this.found.mesh].primitives[this.found.primitive];
     const acc = this.json.accessors[prim.attributes.POSITION];
@@ -207,8 +255,13 @@ export class ProgressiveMesh extends EventDispatcher {
     const pos = this.quantized ? new Int16Array(h.totalVertices * 3) : new Float32Array(h.totalVertices * 3);
     g.setAttribute("position", new BufferAttribute(pos, 3, this.quantized));
     g.setIndex(new BufferAttribute(new Uint32Array(Math.max(3, h.totalTriangles * 3)), 1));
+    g.setAttribute("normal", new BufferAttribute(new Int8Array(h.totalVertices * 3), 3, true));
     g.attributes.position.setUsage(35048); // DYNAMIC_DRAW
+    g.attributes.normal.setUsage(35048);
     g.index.setUsage(35048);
+    // every level's positions lie in the grid's box: one bounding sphere
+    g.boundingSphere = this.quantized ? new Sphere(new Vector3(0, 0, 0), Math.sqrt(3))
+      : new Sphere(new Vector3(...h.center), h.half * Math.sqrt(3));
     this.geometry = g;
     this.writeVertices(0, h.baseVertices);
     g.index.array.set(d.baseTri, 0);
@@ -218,7 +271,14 @@ export class ProgressiveMesh extends EventDispatcher {
       this.mesh.geometry.dispose();
       this.mesh.geometry = g;
     }
+    this.mark("base");
     this.dispatchEvent({ type: "level", level: this.levels.length - 1, records: 0, triangles: this.nt });
+  }
+
+  // A point of the load's timeline (this.timeline: {what, t, bytes}; t in
+  // ms from the load's start, bytes = stream bytes received so far).
+  mark(what) {
+    this.timeline.push({ what, t: performance.now() - this.t0, bytes: this.received });
   }
 
   writeVertices(from, to) {
@@ -236,8 +296,38 @@ export class ProgressiveMesh extends EventDispatcher {
     p.needsUpdate = true;
     g.index.needsUpdate = true;
     g.setDrawRange(0, 3 * this.nt);
-    g.computeVertexNormals();
-    g.computeBoundingSphere();
+    this.computeNormals();
+  }
+
+  // Area-weighted vertex normals of the drawn triangles, from the grid
+  // points (one scale on every axis, so the directions are the positions'),
+  // as snorm8 like `--quantize` writes them; uploaded up to the last vertex.
+  computeNormals() {
+    const d = this.decoder, q = d.q, idx = this.geometry.index.array, n3 = 3 * this.nt;
+    const nv = d.header.baseVertices + this.applied;
+    const acc = this.normalSums || (this.normalSums = new Float32Array(3 * d.header.totalVertices));
+    acc.fill(0, 0, 3 * nv);
+    for (let i = 0; i < n3; i += 3) {
+      const a = 3 * idx[i], b = 3 * idx[i + 1], c = 3 * idx[i + 2];
+      const ax = q[a], ay = q[a + 1], az = q[a + 2];
+      const ux = q[b] - ax, uy = q[b + 1] - ay, uz = q[b + 2] - az;
+      const vx = q[c] - ax, vy = q[c + 1] - ay, vz = q[c + 2] - az;
+      const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+      acc[a] += nx; acc[a + 1] += ny; acc[a + 2] += nz;
+      acc[b] += nx; acc[b + 1] += ny; acc[b + 2] += nz;
+      acc[c] += nx; acc[c + 1] += ny; acc[c + 2] += nz;
+    }
+    const normal = this.geometry.attributes.normal, out = normal.array;
+    for (let v = 0; v < 3 * nv; v += 3) {
+      const x = acc[v], y = acc[v + 1], z = acc[v + 2], len = Math.sqrt(x * x + y * y + z * z);
+      const k = len > 0 ? 127 / len : 0;
+      out[v] = Math.round(x * k);
+      out[v + 1] = Math.round(y * k);
+      out[v + 2] = Math.round(z * k);
+    }
+    normal.clearUpdateRanges();
+    normal.addUpdateRange(0, 3 * nv);
+    normal.needsUpdate = true;
   }
 
   // Make sure chunks up to `last` are requested: one HTTP range for every
@@ -273,8 +363,30 @@ export class ProgressiveMesh extends EventDispatcher {
     }
   }
 
+  // Feed the stream from `file` (read from the start of the file, already
+  // at or before the stream) up to file offset `end`, then let it go.
+  async readOn(file, end) {
+    await file.until(Math.min(this.streamStart, end));
+    let at = file.have;
+    const buffered = file.bytes.subarray(this.streamStart, Math.min(at, end));
+    if (buffered.length) this.take(buffered.slice());
+    if (at >= end) file.cancel();
+    while (at < end) {
+      const v = await file.next();
+      if (!v) throw new Error(`${this.url}: the file ends in the stream`);
+      const from = Math.max(0, this.streamStart - at), to = Math.min(v.length, end - at);
+      // let the rest go before decoding the last piece
+      if (at + v.length >= end) file.cancel();
+      if (to > from) this.take(v.subarray(from, to));
+      at += v.length;
+    }
+  }
+
   take(bytes) {
+    if (!this.received) this.mark("stream first bytes");
+    this.received += bytes.length;
     this.decoder.push(bytes);
+    if (this.received === this.streamLength) this.mark("stream last bytes");
     this.fetched = this.decoder.chunksDone;
     this.wake();
   }
@@ -294,25 +406,30 @@ export class ProgressiveMesh extends EventDispatcher {
     if (this.error && this.decoder.chunksDone < n) throw this.error;
   }
 
-  // Apply every decoded record up to `k` to the geometry.
+  // Apply every decoded record up to `k` to the geometry: the records'
+  // faces in one copy, then their corner edits in order; one update range
+  // for the vertices and one for the indices.
   applyTo(k) {
-    const d = this.decoder, recs = d.records, idx = this.geometry.index.array;
-    if (k <= this.applied) return;
-    let vLo = Infinity, vHi = 0, iLo = Infinity, iHi = 0;
-    for (let i = this.applied; i < k; i++) {
-      const r = recs[i];
-      vLo = Math.min(vLo, r.v1);
-      vHi = Math.max(vHi, r.v0 + 1);
-      idx.set(r.faces, 3 * this.nt);
-      iLo = Math.min(iLo, 3 * this.nt);
-      this.nt += r.faces.length / 3;
-      for (const c of r.corners) { idx[c] = r.v0; iLo = Math.min(iLo, c); }
-      iHi = 3 * this.nt;
+    const d = this.decoder, idx = this.geometry.index.array, a = this.applied;
+    if (k <= a) return;
+    const f0 = 3 * d.fStart[a], f1 = 3 * d.fStart[k];
+    idx.set(d.faces0.subarray(f0, f1), f0);
+    let vLo = Infinity, iLo = f0;
+    const corners = d.corners.a, cs = d.cStart, base = d.header.baseVertices;
+    for (let i = a; i < k; i++) {
+      const v0 = base + i;
+      if (d.v1[i] < vLo) vLo = d.v1[i];
+      for (let j = cs[i]; j < cs[i + 1]; j++) {
+        const c = corners[j];
+        idx[c] = v0;
+        if (c < iLo) iLo = c;
+      }
     }
+    this.nt = d.fStart[k];
     // vertices: grid points at the chunk's end (the decoder's q)
-    this.writeVertices(vLo, vHi);
+    this.writeVertices(vLo, base + k);
     this.applied = k;
-    this.finishUpdate(vLo, vHi, iLo, iHi);
+    this.finishUpdate(vLo, base + k, iLo, f1);
   }
 
   // The level (finest = 0) whose records are all applied.
@@ -325,6 +442,7 @@ export class ProgressiveMesh extends EventDispatcher {
   // Refine up to MSFT_lod level `level` (finest = 0; default: the finest),
   // fetching the chunks that hold it; a "level" event per level reached.
   async refine(level = 0) {
+    await this.start();
     const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
     const h = this.decoder.header;
     const chunkOf = (k) => h.chunks.findIndex((c) => c.records >= k);
@@ -332,7 +450,9 @@ export class ProgressiveMesh extends EventDispatcher {
     const steps = [...new Set(this.levels)].filter((k) => k > this.applied && k <= want).sort((a, b) => a - b);
     for (const k of steps) {
       await this.waitChunks(chunkOf(k) + 1);
+      this.mark(`decoded ${k}`);
       this.applyTo(k);
+      this.mark(`applied ${k}`);
       this.dispatchEvent({ type: "level", level: this.levels.indexOf(k), records: k, triangles: this.nt });
     }
     return this.level();
@@ -341,6 +461,7 @@ export class ProgressiveMesh extends EventDispatcher {
   // Refine to the level MSFT_screencoverage asks for at the mesh's current
   // projected size (the level is never coarsened: the finer data stays).
   async refineForScreen(camera) {
+    await this.start();
     const coverages = this.screenCoverages();
     if (!coverages || !this.mesh) return this.refine(0);
     const sphere = new Sphere().copy(this.geometry.boundingSphere).applyMatrix4(this.mesh.matrixWorld);
@@ -363,14 +484,21 @@ export class ProgressiveMesh extends EventDispatcher {
 // EXT_meshopt_compression), `meshoptDecoder` (awaited `.ready`),
 // `fetchOptions` (passed to fetch), `prefetch` (a level, 0 = finest: request
 // the stream up to it right away, in parallel with the coarse level, when
-// you will refine to it anyway). Returns the ProgressiveMesh with `.gltf`
-// holding the coarsest level; a file without the extension is loaded whole
-// by `loader` (`.gltf` set, nothing to refine).
+// you will refine to it anyway). Resolves, with the ProgressiveMesh, as soon
+// as the coarsest level is parsed (`.gltf`: draw it); `refine` swaps in the
+// stream's geometry once its base chunk is in ("level" event, records 0).
+// A file without the extension is loaded whole by `loader` (`.gltf` set,
+// nothing to refine).
 export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch }) {
+  const t0 = performance.now();
   await meshoptDecoder.ready;
-  const { json, binStart, binLength } = await fetchGlbJson(url, fetchOptions);
+  // one request from the start of the file: lodgen writes the JSON, the
+  // coarsest level and the stream first, in that order
+  const file = new FileStart(url, fetchOptions);
+  const { json, binStart, binLength } = await readGlbJson(file);
   const found = findExtension(json);
   if (!found) {
+    file.cancel();
     const gltf = await loader.loadAsync(url);
     return Object.assign(new EventDispatcher(), { gltf, refine: async () => 0, levels: [] });
   }
@@ -384,18 +512,32 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   const [lo, hi] = meshRange(json, found.mesh);
   const bin = new Uint8Array(binLength);
   const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found });
-  // the coarse level first: on one line, responses come in request order
-  const coarse = hi > lo ? fetchRange(url, binStart + lo, binStart + hi, fetchOptions) : null;
-  if (p.chunkEnds) {
-    // in parallel with the coarse level: chunk 0, and with `prefetch` the
-    // chunks up to that level, in one streamed range request
-    const want = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
-    p.request(0);
-    // which chunk ends which level is in the header: ask for the rest once
-    // chunk 0 (header + base) is in
-    if (want > 0) p.waitChunks(1).then(() => p.request(p.decoder.header.chunks.findIndex((c) => c.records >= want)), () => {});
+  p.t0 = t0;
+  p.mark("json");
+  const wantRecords = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
+  const last = p.chunkEnds ? chunkForRecords(p.levels, p.chunkEnds, wantRecords) : -1;
+  // the coarse level near the start (lodgen's files): read on to it
+  const coarseNear = hi > lo && binStart + lo - file.have <= 65536;
+  const coarse = hi <= lo ? null : coarseNear ? file.until(binStart + hi).then((b) => b.slice(binStart + lo, binStart + hi))
+    : fetchRange(url, binStart + lo, binStart + hi, fetchOptions);
+  // the stream right after it: read on in the same response up to the
+  // chunk that holds `prefetch`, then let the rest go
+  const onLine = coarseNear && last >= 0 && p.streamStart >= binStart + hi && p.streamStart - (binStart + hi) <= 64;
+  if (onLine) {
+    p.requested = last + 1;
+    p.pump = coarse.then(() => p.readOn(file, p.streamStart + p.chunkEnds[last])).catch((e) => { p.error = e; p.wake(); });
+  } else if (p.chunkEnds) {
+    // in parallel with the coarse level: the stream up to `prefetch` (or
+    // chunk 0) in one streamed range request
+    p.request(last >= 0 ? last : 0);
+    // without the level → chunk map, ask for the rest once chunk 0
+    // (header + base) is in
+    if (last < 0) p.waitChunks(1).then(() => p.request(p.decoder.header.chunks.findIndex((c) => c.records >= wantRecords)), () => {});
   }
+  if (!coarseNear) file.cancel();
   if (coarse) bin.set(await coarse, lo);
+  if (!onLine) file.cancel();
+  p.mark("coarse bytes");
   const plugin = (parser) => new LodgenProgressivePlugin(parser, found, (m) => { p.mesh = m; });
   loader.register(plugin);
   try {
@@ -403,7 +545,18 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   } finally {
     loader.unregister(plugin);
   }
-  p.coarseTriangles = json.accessors[json.meshes[found.mesh].primitives[found.primitive].indices].count / 3;
-  await p.start();
+  p.mark("coarse parsed");
+  const prim = json.meshes[found.mesh].primitives[found.primitive];
+  p.coarseTriangles = json.accessors[prim.indices].count / 3;
+  p.nt = p.coarseTriangles;
   return p;
+}
+
+// The chunk holding record `want`, from the glTF `levels` and `chunks`
+// alone: lodgen writes one chunk per distinct non-zero level count; -1 when
+// the file's chunks are otherwise.
+function chunkForRecords(levels, chunkEnds, want) {
+  const ends = [0, ...[...new Set(levels)].filter((k) => k > 0).sort((a, b) => a - b)];
+  if (ends.length !== chunkEnds.length) return want === Math.max(...levels) ? chunkEnds.length - 1 : -1;
+  return ends.findIndex((k) => k >= want);
 }

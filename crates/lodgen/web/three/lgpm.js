@@ -7,13 +7,16 @@
 //   import { MeshoptDecoder } from "meshoptimizer";
 //   await MeshoptDecoder.ready;
 //   const d = new StreamDecoder(MeshoptDecoder);
-//   d.push(bytes);                 // any split of the stream; decodes whole chunks
-//   d.records                      // [{v1, v0, p1, pm, p0, faces, corners, wfaces, wafter, wbefore}]
+//   d.push(bytes);                 // any split of the stream, as it arrives
+//   d.count                        // records decoded so far
+//   d.record(i)                    // {v1, v0, p1, pm, p0, faces, corners, wfaces, wafter, wbefore}
 //
-// Positions come out as grid points (d.q, Uint16Array, 3 per vertex) and as
-// f32 (center + (q - s) / s * half in double precision, rounded once).
-// `corners` are corner indices t * 3 + slot; p1 / pm / p0, faces and corners
-// are plain arrays.
+// A chunk's topology is replayed as soon as its first four columns are in
+// (streams without wedges), its positions once the chunk is whole. Records
+// are kept in typed arrays (see StreamDecoder), nothing is allocated per
+// record. Positions come out as grid points (d.q, Uint16Array, 3 per
+// vertex) and as f32 (center + (q - s) / s * half in double precision,
+// rounded once). `corners` are corner indices t * 3 + slot.
 
 const FACE_ESCAPE = 255;
 const NONE = 0xffffffff;
@@ -207,30 +210,6 @@ class Columns {
   }
 }
 
-function words(arr, what) {
-  let pos = 0;
-  return {
-    next() {
-      if (pos >= arr.length) throw new Error(`the ${what} column ends early`);
-      return arr[pos++];
-    },
-    done: () => pos === arr.length,
-  };
-}
-
-// Residuals from the prefix sums a u16x4 column stores (x, y, z, 0).
-function differences(sums) {
-  const n = sums.length / 4, out = new Uint16Array(n * 3);
-  let px = 0, py = 0, pz = 0;
-  for (let i = 0; i < n; i++) {
-    const x = sums[4 * i], y = sums[4 * i + 1], z = sums[4 * i + 2];
-    out[3 * i] = (x - px) & 0xffff;
-    out[3 * i + 1] = (y - py) & 0xffff;
-    out[3 * i + 2] = (z - pz) & 0xffff;
-    px = x; py = y; pz = z;
-  }
-  return out;
-}
 
 // The wing faces of a split: indices (in faces / 3) of its first two faces
 // holding v0, v1 and exactly one other corner, when their third vertices differ.
@@ -248,69 +227,146 @@ function wingFaces(faces, v0, v1) {
   return xs.length === 2 && xs[0] !== xs[1] ? is : null;
 }
 
-function wings(faces, v0, v1) {
-  const w = wingFaces(faces, v0, v1);
-  if (!w) return null;
-  const third = (k) => { for (let j = 0; j < 3; j++) { const x = faces[3 * k + j]; if (x !== v0 && x !== v1) return x; } return -1; };
-  return [third(w[0]), third(w[1])];
+function words(arr, what) {
+  let pos = 0;
+  return {
+    next() {
+      if (pos >= arr.length) throw new Error(`the ${what} column ends early`);
+      return arr[pos++];
+    },
+    done: () => pos === arr.length,
+  };
 }
 
+// A Uint32Array that grows by doubling.
+class U32List {
+  constructor(n = 1024) {
+    this.a = new Uint32Array(n);
+    this.n = 0;
+  }
+  push(x) {
+    if (this.n === this.a.length) {
+      const b = new Uint32Array(2 * this.a.length);
+      b.set(this.a);
+      this.a = b;
+    }
+    this.a[this.n++] = x;
+  }
+}
+
+// Whether `b[0..have]` holds the first `n` columns whole.
+function columnsIn(b, have, n) {
+  let pos = 0;
+  const varint = () => {
+    let v = 0, mul = 1;
+    for (let i = 0; i < 8; i++) {
+      if (pos >= have) return -1;
+      const x = b[pos++];
+      v += (x & 0x7f) * mul;
+      if ((x & 0x80) === 0) return v;
+      mul *= 128;
+    }
+    return -1;
+  };
+  for (let i = 0; i < n; i++) {
+    if (varint() < 0) return false;
+    const len = varint();
+    if (len < 0) return false;
+    pos += len;
+    if (pos > have) return false;
+  }
+  return true;
+}
+
+// Records are kept column-wise in typed arrays (no object per record):
+// record i restores vertex v0 = baseVertices + i, splitting v1[i]; its faces
+// are triangles fStart[i] .. fStart[i + 1] (their corners as appended in
+// faces0, which also holds the base triangles); its corner edits are
+// corners[cStart[i] .. cStart[i + 1]] (corner index t * 3 + slot). With
+// wedges: wfaces0 (the appended faces' wedges, base corners included),
+// wafter / wbefore parallel to corners. Positions: p1 / p0 / pm, 3 per record.
 export class StreamDecoder {
   constructor(meshoptDecoder) {
     this.mo = meshoptDecoder;
-    this.pending = new Uint8Array(0);
-    this.consumed = 0;
+    this.headBytes = new Uint8Array(0); // bytes before the header is parsed
+    this.consumed = 0; // stream offset of the current chunk
     this.header = null;
     this.chunksDone = 0;
     this.baseReady = false;
-    this.records = [];
-    this.levelEvents = [];
+    this.count = 0; // records decoded (topology and positions)
+    this.buf = null; // the current chunk's bytes, `have` of them in
+    this.have = 0;
+    this.topo = null; // the current chunk's topology, replayed before its positions
   }
 
+  // Take the next bytes of the stream (any split); decodes what is whole:
+  // a chunk's topology once its first columns are in, its positions and
+  // wedges once all of it is. Returns the number of records completed.
   push(chunk) {
-    const merged = new Uint8Array(this.pending.length + chunk.length);
-    merged.set(this.pending, 0);
-    merged.set(chunk, this.pending.length);
-    this.pending = merged;
-    const before = this.records.length;
+    const before = this.count;
     if (!this.header) {
+      const merged = new Uint8Array(this.headBytes.length + chunk.length);
+      merged.set(this.headBytes, 0);
+      merged.set(chunk, this.headBytes.length);
       try {
-        this.header = parseHeader(this.pending);
+        this.header = parseHeader(merged);
       } catch (e) {
-        if (e instanceof NeedMore) return 0;
+        if (e instanceof NeedMore) { this.headBytes = merged; return 0; }
         throw e;
       }
-      this.eat(this.header.headerBytes);
+      this.headBytes = null;
+      this.consumed = this.header.headerBytes;
+      chunk = merged.subarray(this.header.headerBytes);
     }
     const h = this.header;
-    while (this.chunksDone < h.chunks.length && this.pending.length >= h.chunks[this.chunksDone].bytes) {
+    let at = 0;
+    while (at < chunk.length) {
+      if (this.chunksDone === h.chunks.length) throw new Error(`${chunk.length - at} bytes follow the last chunk`);
       const c = h.chunks[this.chunksDone];
-      const bytes = this.pending.subarray(0, c.bytes);
-      if (this.chunksDone === 0) this.decodeBase(bytes, this.consumed);
-      else this.decodeChunk(bytes, this.consumed, c.records - h.chunks[this.chunksDone - 1].records);
-      this.chunksDone++;
-      this.eat(c.bytes);
+      if (!this.buf) { this.buf = new Uint8Array(c.bytes); this.have = 0; }
+      const n = Math.min(c.bytes - this.have, chunk.length - at);
+      this.buf.set(chunk.subarray(at, at + n), this.have);
+      this.have += n;
+      at += n;
+      if (this.chunksDone === 0) {
+        if (this.have === c.bytes) this.decodeBase(this.buf, this.consumed);
+      } else {
+        this.decodeChunk(this.buf, this.have, this.consumed, c.records - h.chunks[this.chunksDone - 1].records);
+      }
+      if (this.have === c.bytes) {
+        this.consumed += c.bytes;
+        this.chunksDone++;
+        this.buf = null;
+        this.have = 0;
+      }
     }
-    if (this.chunksDone === h.chunks.length) {
-      if (this.pending.length) throw new Error(`${this.pending.length} bytes follow the last chunk`);
+    if (this.complete()) {
       if (this.nt !== h.totalTriangles) throw new Error("the records restore a different triangle count");
       if (h.wedges && this.nw !== h.wedges.total) throw new Error("the records define a different wedge count");
     }
-    return this.records.length - before;
-  }
-
-  eat(n) {
-    this.consumed += n;
-    this.pending = this.pending.slice(n);
+    return this.count - before;
   }
 
   complete() {
-    return !!this.header && this.chunksDone === this.header.chunks.length && this.pending.length === 0;
+    return !!this.header && this.chunksDone === this.header.chunks.length;
   }
 
   deq(q, v, out, o) {
     const h = this.header, s = h.scale;
     for (let a = 0; a < 3; a++) out[o + a] = Math.fround(h.center[a] + ((q[3 * v + a] - s) / s) * h.half);
+  }
+
+  // Record i as an object of subarrays (for callers that want one).
+  record(i) {
+    const f = 3 * this.fStart[i], g = 3 * this.fStart[i + 1], c = this.cStart[i], d = this.cStart[i + 1];
+    return {
+      v1: this.v1[i], v0: this.header.baseVertices + i,
+      p1: this.p1.subarray(3 * i, 3 * i + 3), pm: this.pm.subarray(3 * i, 3 * i + 3), p0: this.p0.subarray(3 * i, 3 * i + 3),
+      faces: this.faces0.subarray(f, g), corners: this.corners.a.subarray(c, d),
+      wfaces: this.wfaces0 ? this.wfaces0.subarray(f, g) : null,
+      wafter: this.wfaces0 ? this.wafter.a.subarray(c, d) : null,
+      wbefore: this.wfaces0 ? this.wbefore.a.subarray(c, d) : null,
+    };
   }
 
   decodeBase(bytes, offset) {
@@ -326,15 +382,32 @@ export class StreamDecoder {
       }
     }
     const flat = cols.sequence("base triangle", 3 * h.baseTriangles);
-    for (const v of flat) if (v >= nv) throw new Error(`base corner ${v} out of range`);
-    this.tri = new Uint32Array(h.totalTriangles * 3);
+    for (let i = 0; i < flat.length; i++) if (flat[i] >= nv) throw new Error(`base corner ${flat[i]} out of range`);
+    const nc = 3 * h.totalTriangles, ns = h.splitCount;
+    this.tri = new Uint32Array(nc);
     this.tri.set(flat, 0);
+    this.faces0 = new Uint32Array(nc);
+    this.faces0.set(flat, 0);
+    // the corners at each vertex, ascending: a linked list per vertex
+    this.head = new Uint32Array(h.totalVertices).fill(NONE);
+    this.tail = new Uint32Array(h.totalVertices).fill(NONE);
+    this.nextC = new Uint32Array(nc);
+    this.v1 = new Uint32Array(ns);
+    this.fStart = new Uint32Array(ns + 1);
+    this.cStart = new Uint32Array(ns + 1);
+    this.fStart[0] = h.baseTriangles;
+    this.corners = new U32List();
+    this.p1 = new Float32Array(3 * ns);
+    this.p0 = new Float32Array(3 * ns);
+    this.pm = new Float32Array(3 * ns);
+    this.scratch = new Uint32Array(64);
+    this.ringBuf = [];
+    this.movedOf = new Int32Array(h.totalVertices).fill(-1);
     this.nt = h.baseTriangles;
     this.nv = nv;
     this.q = q;
-    this.fans = [];
-    for (let v = 0; v < nv; v++) this.fans.push([]);
-    for (let t = 0; t < this.nt; t++) this.addFan(t);
+    for (let c = 0; c < 3 * this.nt; c++) this.append(c);
+    this.wfaces0 = null;
     if (h.wedges) {
       const w = h.wedges;
       this.wvals = new Float32Array(w.total * w.stride);
@@ -349,36 +422,59 @@ export class StreamDecoder {
       this.f32Bits = new Uint32Array(this.f32.buffer);
       this.cand = [];
       this.nw = 0;
-      this.cw = new Uint32Array(h.totalTriangles * 3);
+      this.cw = new Uint32Array(nc);
       this.cw.fill(NONE, 0, 3 * h.baseTriangles);
+      this.wfaces0 = new Uint32Array(nc);
+      this.wafter = new U32List();
+      this.wbefore = new U32List();
       const wc = this.wedgeColumns(cols);
       for (let i = 0; i < 3 * h.baseTriangles; i++) wc.next((i / 3) | 0, i % 3, undefined, null);
       wc.finish();
       this.baseCW = this.cw.slice(0, 3 * h.baseTriangles);
+      this.wfaces0.set(this.baseCW, 0);
     }
     cols.finish("the base chunk");
     this.baseTri = flat;
     this.basePositions = new Float32Array(nv * 3);
     for (let v = 0; v < nv; v++) this.deq(q, v, this.basePositions, 3 * v);
+    this.cur = new Float32Array(h.totalVertices * 3);
+    this.cur.set(this.basePositions, 0);
     this.baseReady = true;
   }
 
-  addFan(t) {
-    const tri = this.tri;
-    for (let i = 0; i < 3; i++) {
-      const v = tri[3 * t + i];
-      if ((i > 0 && tri[3 * t] === v) || (i > 1 && tri[3 * t + 1] === v)) continue;
-      this.fans[v].push(t);
-    }
+  // Corner c (the largest so far) joins its vertex's list.
+  append(c) {
+    const v = this.tri[c];
+    this.nextC[c] = NONE;
+    if (this.head[v] === NONE) this.head[v] = c;
+    else this.nextC[this.tail[v]] = c;
+    this.tail[v] = c;
+  }
+
+  // Corner c leaves vertex `from`'s list and joins `to`'s, in order.
+  moveCorner(c, from, to) {
+    const next = this.nextC, head = this.head, tail = this.tail;
+    let p = NONE, x = head[from];
+    while (x !== c) { p = x; x = next[x]; }
+    if (p === NONE) head[from] = next[c];
+    else next[p] = next[c];
+    if (tail[from] === c) tail[from] = p;
+    p = NONE;
+    x = head[to];
+    while (x !== NONE && x < c) { p = x; x = next[x]; }
+    next[c] = x;
+    if (p === NONE) head[to] = c;
+    else next[p] = c;
+    if (x === NONE) tail[to] = c;
   }
 
   // The vertices sharing a triangle with v, ascending, each once (a
   // scratch array, valid until the next call).
   ring(v) {
-    const r = this.ringBuf || (this.ringBuf = []), tri = this.tri, fan = this.fans[v];
+    const r = this.ringBuf, tri = this.tri, next = this.nextC;
     let n = 0;
-    for (let i = 0; i < fan.length; i++) {
-      const o = 3 * fan[i];
+    for (let c = this.head[v]; c !== NONE; c = next[c]) {
+      const o = c - (c % 3);
       for (let j = 0; j < 3; j++) {
         const u = tri[o + j];
         if (u === v) continue;
@@ -399,30 +495,18 @@ export class StreamDecoder {
   // wedges at its vertex in the triangles sharing an edge with t, then
   // `before`, then every other wedge at the vertex.
   candidates(t, s, before) {
-    const tri = this.tri, cw = this.cw, cand = this.cand;
+    const tri = this.tri, cw = this.cw, cand = this.cand, next = this.nextC;
     cand.length = 0;
     const o = 3 * t, u = tri[o + s], a = tri[o + ((s + 1) % 3)], b = tri[o + ((s + 2) % 3)];
-    const fan = this.fans[u];
     const push = (w) => { if (w !== NONE && !cand.includes(w)) cand.push(w); };
-    for (let i = 0; i < fan.length; i++) {
-      const t2 = fan[i];
-      if (t2 === t) continue;
-      const p = 3 * t2, g0 = tri[p], g1 = tri[p + 1], g2 = tri[p + 2];
-      if ((a !== u && (g0 === a || g1 === a || g2 === a)) || (b !== u && (g0 === b || g1 === b || g2 === b))) {
-        if (g0 === u) push(cw[p]);
-        if (g1 === u) push(cw[p + 1]);
-        if (g2 === u) push(cw[p + 2]);
-      }
+    for (let c = this.head[u]; c !== NONE; c = next[c]) {
+      const p = c - (c % 3);
+      if (p === o) continue;
+      const g0 = tri[p], g1 = tri[p + 1], g2 = tri[p + 2];
+      if ((a !== u && (g0 === a || g1 === a || g2 === a)) || (b !== u && (g0 === b || g1 === b || g2 === b))) push(cw[c]);
     }
     if (before !== undefined) push(before);
-    for (let i = 0; i < fan.length; i++) {
-      const t2 = fan[i];
-      if (t2 === t) continue;
-      const p = 3 * t2;
-      if (tri[p] === u) push(cw[p]);
-      if (tri[p + 1] === u) push(cw[p + 1]);
-      if (tri[p + 2] === u) push(cw[p + 2]);
-    }
+    for (let c = this.head[u]; c !== NONE; c = next[c]) if (c - (c % 3) !== o) push(cw[c]);
   }
 
   // The wedges predicting a new wedge's values at corner (t, s):
@@ -447,7 +531,6 @@ export class StreamDecoder {
     for (const i of [(s + 1) % 3, (s + 2) % 3]) if (cw[o + i] !== NONE) return [1, cw[o + i]];
     return [0];
   }
-
   // wedge references of a chunk: refs, groups, values; next(t, s, before,
   // rec) = the wedge of corner (t, s), recorded there
   wedgeColumns(cols) {
@@ -530,146 +613,181 @@ export class StreamDecoder {
     };
   }
 
-  decodeChunk(bytes, offset, n) {
-    const h = this.header, cols = new Columns(this.mo, bytes, offset);
-    const v1s = cols.u32("split vertex", n);
-    const codes = cols.vertices("face code", 4, n);
-    const extra = words(cols.u32("escape"), "escape");
-    const mask = cols.bits("corner mask");
-    const moved = differences(cols.u16x4("moved position"));
-    const fresh = differences(cols.u16x4("new position", n));
-    const wc = h.wedges ? this.wedgeColumns(cols) : null;
-    const errors = h.flags & 1 ? cols.u32("error", n) : null;
+  // A chunk of n records, `have` of its bytes in: without wedges the
+  // topology is replayed once its first four columns are in (while the
+  // positions still download), the rest once the chunk is whole.
+  decodeChunk(bytes, have, offset, n) {
+    const h = this.header, whole = have === bytes.length;
+    if (!this.topo) {
+      if (!whole && (h.wedges || !columnsIn(bytes, have, 4))) return;
+      const cols = new Columns(this.mo, bytes, offset);
+      const v1s = cols.u32("split vertex", n);
+      const codes = cols.vertices("face code", 4, n);
+      const extra = words(cols.u32("escape"), "escape");
+      const mask = cols.bits("corner mask");
+      this.topo = { cols, wc: null, first: this.count, va: this.nv };
+      if (h.wedges) {
+        // the wedges are coded in replay order: read their columns first
+        this.topo.moved = cols.u16x4("moved position");
+        this.topo.fresh = cols.u16x4("new position", n);
+        this.topo.wc = this.wedgeColumns(cols);
+      }
+      for (let i = 0; i < n; i++) this.replay(this.count + i, v1s[i], codes, i, extra, mask, this.topo.wc);
+      if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
+      if (this.topo.wc) this.topo.wc.finish();
+    }
+    if (!whole) return;
+    const { cols, first, va } = this.topo;
+    const moved = this.topo.moved || cols.u16x4("moved position");
+    const fresh = this.topo.fresh || cols.u16x4("new position", n);
+    if (h.flags & 1) cols.u32("error", n);
     cols.finish("the chunk");
-    const va = this.nv, recs = [];
-    for (let i = 0; i < n; i++) recs.push(this.replay(v1s[i], codes, i, extra, mask, wc));
-    if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
-    if (wc) wc.finish();
-    this.positions(recs, moved, fresh, va);
-    for (const r of recs) this.records.push(r);
-    void errors;
+    this.positions(first, n, moved, fresh, va);
+    this.topo = null;
+    this.count += n;
   }
 
-  faces(codes, i, extra, v0, v1, ring) {
-    let nf = codes[4 * i];
+  // Replays record i (topology, and wedges with `wc`), appending it to the
+  // record columns.
+  replay(i, v1, codes, ci, extra, mask, wc) {
+    const h = this.header, v0 = this.nv, tri = this.tri;
+    if (v1 >= v0) throw new Error(`split vertex ${v1} does not exist yet`);
+    const ring = this.ring(v1);
+    let nf = codes[4 * ci];
     if (nf === 255) nf = extra.next();
     if (nf > 65536) throw new Error(`${nf} faces in one split`);
-    const cs = [];
+    const first = this.nt;
+    if (first + nf > h.totalTriangles) throw new Error("more triangles than announced");
+    if (this.scratch.length < nf) this.scratch = new Uint32Array(2 * nf);
+    const cs = this.scratch;
     for (let k = 0; k < nf; k++) {
-      const c = k < 2 ? codes[4 * i + 1 + k] : extra.next();
+      const c = k < 2 ? codes[4 * ci + 1 + k] : extra.next();
       if (c > 255) throw new Error("face code over 255");
-      cs.push(c);
+      cs[k] = c;
     }
-    const faces = new Array(3 * nf);
-    cs.forEach((c, k) => {
+    for (let k = 0; k < nf; k++) {
+      const c = cs[k], o = 3 * (first + k);
       if (c === FACE_ESCAPE) {
         for (let j = 0; j < 3; j++) {
           const x = extra.next();
           const v = x === 0 ? v0 : x === 1 ? v1 : x - 1 <= v0 ? v0 - (x - 1) : -1;
           if (v < 0) throw new Error("escaped face corner out of range");
-          faces[3 * k + j] = v;
+          tri[o + j] = v;
         }
       } else {
-        const p = c % 6, r = Math.floor(c / 6);
+        const p = c % 6, r = (c / 6) | 0;
         if (r >= RING_CODES || r >= ring.length) throw new Error(`face code ${c} beyond the ring of ${v1}`);
         const perm = PERMS[p];
-        faces[3 * k + perm[0]] = v0;
-        faces[3 * k + perm[1]] = v1;
-        faces[3 * k + perm[2]] = ring[r];
+        tri[o + perm[0]] = v0;
+        tri[o + perm[1]] = v1;
+        tri[o + perm[2]] = ring[r];
       }
-    });
-    return faces;
-  }
-
-  replay(v1, codes, i, extra, mask, wc) {
-    const h = this.header, v0 = this.nv;
-    if (v1 >= v0) throw new Error(`split vertex ${v1} does not exist yet`);
-    const ring = this.ring(v1);
-    const faces = this.faces(codes, i, extra, v0, v1, ring);
-    const nf = faces.length / 3;
-    if (this.nt + nf > h.totalTriangles) throw new Error("more triangles than announced");
-    this.fans.push([]);
-    this.nv++;
-    this.tri.set(faces, 3 * this.nt);
-    for (let k = 0; k < nf; k++) this.addFan(this.nt + k);
-    this.nt += nf;
-    const held = [];
-    for (const t of this.fans[v1]) for (let s = 0; s < 3; s++) if (this.tri[3 * t + s] === v1) held.push(3 * t + s);
-    const corners = [];
-    for (const c of held) {
-      if (!mask.next()) continue;
-      corners.push(c);
-      const t = (c / 3) | 0;
-      this.tri[c] = v0;
-      const tri = this.tri;
-      if (tri[3 * t] !== v1 && tri[3 * t + 1] !== v1 && tri[3 * t + 2] !== v1) {
-        const f = this.fans[v1], j = f.indexOf(t);
-        if (j >= 0) f.splice(j, 1);
-      }
-      const f0 = this.fans[v0];
-      let k = f0.length;
-      while (k > 0 && f0[k - 1] > t) k--;
-      if (k === 0 || f0[k - 1] !== t) f0.splice(k, 0, t);
     }
-    const rec = { v1, v0, p1: [0, 0, 0], pm: [0, 0, 0], p0: [0, 0, 0], faces, corners,
-      wfaces: null, wafter: null, wbefore: null };
+    this.faces0.set(tri.subarray(3 * first, 3 * (first + nf)), 3 * first);
+    this.nv++;
+    this.nt += nf;
+    for (let c = 3 * first; c < 3 * this.nt; c++) this.append(c);
+    this.v1[i] = v1;
+    this.fStart[i + 1] = this.nt;
+    // the corners at v1 (ascending), each moved to v0 when the mask says so
+    const corners = this.corners, c0 = corners.n, next = this.nextC;
+    for (let c = this.head[v1]; c !== NONE; c = next[c]) if (mask.next()) corners.push(c);
+    for (let k = c0; k < corners.n; k++) {
+      const c = corners.a[k];
+      tri[c] = v0;
+      this.moveCorner(c, v1, v0);
+    }
+    this.cStart[i + 1] = corners.n;
     if (wc) {
-      const first = this.nt - nf, cw = this.cw, tri = this.tri;
-      const wf = wingFaces(faces, v0, v1);
+      const cw = this.cw, end = 3 * this.nt;
+      const wf = wingFaces(this.faces0.subarray(3 * first, end), v0, v1);
       const ctx = { v0, v1, wings: wf ? [first + wf[0], first + wf[1]] : null };
-      cw.fill(NONE, 3 * first, 3 * this.nt);
+      cw.fill(NONE, 3 * first, end);
       for (let pass = 0; pass < 2; pass++) {
-        for (let c = 3 * first; c < 3 * this.nt; c++) {
+        for (let c = 3 * first; c < end; c++) {
           if ((tri[c] === v0) === (pass === 1)) wc.next((c / 3) | 0, c % 3, undefined, ctx);
         }
       }
-      rec.wfaces = cw.slice(3 * first, 3 * this.nt);
-      rec.wafter = new Uint32Array(corners.length);
-      rec.wbefore = new Uint32Array(corners.length);
-      corners.forEach((c, k) => { rec.wbefore[k] = cw[c]; cw[c] = NONE; });
-      corners.forEach((c, k) => { rec.wafter[k] = wc.next((c / 3) | 0, c % 3, rec.wbefore[k], ctx); });
+      this.wfaces0.set(cw.subarray(3 * first, end), 3 * first);
+      for (let k = c0; k < corners.n; k++) {
+        const c = corners.a[k];
+        this.wbefore.push(cw[c]);
+        cw[c] = NONE;
+      }
+      for (let k = c0; k < corners.n; k++) {
+        const c = corners.a[k];
+        this.wafter.push(wc.next((c / 3) | 0, c % 3, this.wbefore.a[k], ctx));
+      }
     }
-    return rec;
   }
 
-  // Grid points at the chunk's end, then each record's p1 / p0 / p_merged.
-  positions(recs, moved, fresh, va) {
-    const q = this.q, lim = 2 * this.header.scale;
-    const slot = new Map(), start = [];
-    for (const r of recs) {
-      if (r.v1 < va && !slot.has(r.v1)) {
-        slot.set(r.v1, start.length);
-        start.push([q[3 * r.v1], q[3 * r.v1 + 1], q[3 * r.v1 + 2]]);
+  // The third vertices (a, b) of record i's wing faces into w, or false.
+  wingsOf(i, w) {
+    const f = this.faces0, v0 = this.header.baseVertices + i, v1 = this.v1[i];
+    let n = 0;
+    for (let o = 3 * this.fStart[i]; o < 3 * this.fStart[i + 1] && n < 2; o += 3) {
+      const a = f[o], b = f[o + 1], c = f[o + 2];
+      if ((a !== v0 && b !== v0 && c !== v0) || (a !== v1 && b !== v1 && c !== v1)) continue;
+      let m = 0, x = -1;
+      if (a !== v0 && a !== v1) { m++; x = a; }
+      if (b !== v0 && b !== v1) { m++; x = b; }
+      if (c !== v0 && c !== v1) { m++; x = c; }
+      if (m === 1) w[n++] = x;
+    }
+    return n === 2 && w[0] !== w[1];
+  }
+
+  // Grid points at the chunk's end for records first .. first + n, then
+  // each record's p1 / p0 / p_merged.
+  positions(first, n, movedSums, freshSums, va) {
+    const q = this.q, lim = 2 * this.header.scale, slot = this.movedOf;
+    // the moved vertices: distinct v1 < va, in order of first appearance
+    const moved = [];
+    for (let i = first; i < first + n; i++) {
+      const v = this.v1[i];
+      if (v < va && slot[v] < 0) { slot[v] = moved.length; moved.push(v); }
+    }
+    if (moved.length * 4 !== movedSums.length) throw new Error(`${movedSums.length / 4} moved positions for ${moved.length} moved vertices`);
+    const start = new Uint16Array(3 * moved.length);
+    let px = 0, py = 0, pz = 0;
+    for (let k = 0; k < moved.length; k++) {
+      const v = moved[k], x = movedSums[4 * k], y = movedSums[4 * k + 1], z = movedSums[4 * k + 2];
+      const r0 = x - px, r1 = y - py, r2 = z - pz;
+      px = x; py = y; pz = z;
+      for (let a = 0; a < 3; a++) {
+        start[3 * k + a] = q[3 * v + a];
+        const e = (q[3 * v + a] + (a === 0 ? r0 : a === 1 ? r1 : r2)) & 0xffff;
+        if (e > lim) throw new Error("position outside the grid");
+        q[3 * v + a] = e;
       }
     }
-    if (start.length * 3 !== moved.length) throw new Error(`${moved.length / 3} moved positions for ${start.length} moved vertices`);
-    const set = (v, a, x) => {
-      if (x > lim) throw new Error("position outside the grid");
-      q[3 * v + a] = x;
-    };
-    for (const [v, k] of slot) for (let a = 0; a < 3; a++) set(v, a, (start[k][a] + moved[3 * k + a]) & 0xffff);
-    recs.forEach((r, i) => {
-      const w = wings(r.faces, r.v0, r.v1);
-      const s = r.v1 < va ? start[slot.get(r.v1)] : null;
+    const w = this.wingBuf || (this.wingBuf = new Int32Array(2));
+    px = py = pz = 0;
+    for (let j = 0; j < n; j++) {
+      const i = first + j, v1 = this.v1[i], v0 = this.header.baseVertices + i;
+      const x = freshSums[4 * j], y = freshSums[4 * j + 1], z = freshSums[4 * j + 2];
+      const r0 = x - px, r1 = y - py, r2 = z - pz;
+      px = x; py = y; pz = z;
+      const wing = this.wingsOf(i, w), k = v1 < va ? slot[v1] : -1;
       for (let a = 0; a < 3; a++) {
-        const p1 = q[3 * r.v1 + a];
-        const pred = w ? q[3 * w[0] + a] + q[3 * w[1] + a] - p1 : s ? 2 * s[a] - p1 : p1;
-        set(r.v0, a, (pred + fresh[3 * i + a]) & 0xffff);
+        const p1 = q[3 * v1 + a];
+        const pred = wing ? q[3 * w[0] + a] + q[3 * w[1] + a] - p1 : k >= 0 ? 2 * start[3 * k + a] - p1 : p1;
+        const e = (pred + (a === 0 ? r0 : a === 1 ? r1 : r2)) & 0xffff;
+        if (e > lim) throw new Error("position outside the grid");
+        q[3 * v0 + a] = e;
       }
-    });
+    }
+    for (const v of moved) slot[v] = -1;
     // replay positions in order: p_merged is the position before the split
-    if (!this.cur) {
-      this.cur = new Float32Array(this.header.totalVertices * 3);
-      this.cur.set(this.basePositions, 0);
-    }
-    for (const r of recs) {
-      this.deq(q, r.v1, r.p1, 0);
-      this.deq(q, r.v0, r.p0, 0);
-      const c = this.cur;
+    const c = this.cur;
+    for (let i = first; i < first + n; i++) {
+      const v1 = this.v1[i], v0 = this.header.baseVertices + i;
+      this.deq(q, v1, this.p1, 3 * i);
+      this.deq(q, v0, this.p0, 3 * i);
       for (let a = 0; a < 3; a++) {
-        r.pm[a] = c[3 * r.v1 + a];
-        c[3 * r.v1 + a] = r.p1[a];
-        c[3 * r.v0 + a] = r.p0[a];
+        this.pm[3 * i + a] = c[3 * v1 + a];
+        c[3 * v1 + a] = this.p1[3 * i + a];
+        c[3 * v0 + a] = this.p0[3 * i + a];
       }
     }
   }
