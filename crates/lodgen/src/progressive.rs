@@ -489,7 +489,7 @@ fn buffer0_ranges(root: &Value, v: usize) -> Vec<(String, usize, usize)> {
 /// level), shifting the data behind it: a client reading the file from its
 /// start gets the JSON, the coarsest level and the stream, in that order.
 /// Left at the end when a range of buffer 0 straddles that point.
-fn hoist_stream(root: &mut Value, bin: &mut Vec<u8>, view: usize, mesh: usize) {
+fn hoist_stream(root: &mut Value, bin: &mut [u8], view: usize, mesh: usize) {
     let views = root["bufferViews"].as_array().map_or(0, Vec::len);
     let accessor_view = |a: &Value| {
         let i = a.as_u64()? as usize;
