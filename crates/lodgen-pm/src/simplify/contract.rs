@@ -76,6 +76,9 @@ impl Simplifier {
                 .copied()
                 .filter(|&t| self.tri_alive[t as usize]),
         );
+        // (the edits are in the order of the corners moved here: the live
+        // triangles of v0's fan but the removed ones, on v0)
+        let mut next = 0;
         for &t in self.vtris.fan(v0) {
             if !self.tri_alive[t as usize] {
                 continue;
@@ -83,7 +86,11 @@ impl Simplifier {
             if let Some(k) = self.log.move_corner(&mut self.tris[t as usize], t, v0, v1) {
                 into.push(t);
                 if let (Some((edits, true)), Some(f)) = (&edits, &mut self.features) {
-                    let e = edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1);
+                    let e = match edits.get(next) {
+                        Some(e) if e.0 == t => e.1,
+                        _ => edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1),
+                    };
+                    next += 1;
                     if let Some(w) = f.wedges.as_mut() {
                         w[t as usize][k] = e[1];
                     }

@@ -66,6 +66,11 @@ pub(crate) struct Features {
     /// Triangle → the wedge of each corner, when tracked. Dead triangles
     /// keep the wedges they had when they died.
     pub wedges: Option<Vec<[u32; 3]>>,
+    /// Vertex → its wedge, when all corners of each vertex share one
+    /// (positions-only input, no seam). It stays so: a contraction gives
+    /// each corner of `v0` the wedge of `v1`, so `wedge_edits` needs no
+    /// sectors and reads no corner's wedge.
+    pub vertex_wedge: Option<Vec<u32>>,
 }
 
 /// One moved corner's wedge edit: `(triangle, [wedge before, wedge after])`.
@@ -78,6 +83,7 @@ impl Features {
             nbrs: vec![SmallVec::new(); nv],
             kind: vec![Kind::Free; nv],
             wedges: None,
+            vertex_wedge: None,
         };
         let mut half = edge_uses(tris);
         half.sort_unstable();
@@ -102,12 +108,10 @@ impl Features {
         true
     }
 
-    /// The interior edges across which the wedges of `wedges` differ.
+    /// The interior edges across which the wedges of `wedges` differ
+    /// (there are none when [`vertex_wedges`] finds one wedge per vertex:
+    /// the caller skips this, which sorts every edge).
     pub fn seams(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> Vec<(u32, u32)> {
-        if one_wedge_per_vertex(tris, wedges) {
-            // no edge can have differing wedges: skip sorting every edge
-            return Vec::new();
-        }
         let mut half = edge_uses(tris);
         half.sort_unstable();
         let wedge_at = |t: u32, v: u32| {
@@ -166,6 +170,9 @@ impl Features {
         let Some(w) = &self.wedges else {
             return out;
         };
+        if let Some(vw) = &self.vertex_wedge {
+            return uniform_edits(vw, [v0, v1], tris, fan0, fan1, alive, removed);
+        }
         let slot = |t: u32, v: u32| tris[t as usize].iter().position(|&x| x == v);
         let wedge = |t: u32, v: u32| slot(t, v).map(|k| w[t as usize][k]);
         let fan: SmallVec<[u32; 16]> = fan0
@@ -237,21 +244,45 @@ impl Features {
     }
 }
 
-/// Whether all corners of each vertex share one wedge (no seam anywhere:
-/// positions-only input).
-fn one_wedge_per_vertex(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> bool {
+/// [`Features::wedge_edits`] when every vertex has one wedge `vw[v]`:
+/// the same edits (each live corner of `v0` but the removed triangles'
+/// takes `v1`'s wedge; `v1`'s wedge too when no deleted triangle gives
+/// one, if `v1` has a live triangle), without reading any corner's wedge.
+fn uniform_edits(
+    vw: &[u32],
+    [v0, v1]: [u32; 2],
+    tris: &[[u32; 3]],
+    fan0: &[u32],
+    fan1: &[u32],
+    alive: &[bool],
+    removed: &[u32],
+) -> WedgeEdits {
+    let old = vw[v0 as usize];
+    let has_v1 = !removed.is_empty() || fan1.iter().any(|&t| alive[t as usize]);
+    let new = if has_v1 { vw[v1 as usize] } else { old };
+    fan0.iter()
+        .filter(|&&t| alive[t as usize] && !removed.contains(&t))
+        .filter(|&&t| tris[t as usize].contains(&v0))
+        .map(|&t| (t, [old, new]))
+        .collect()
+}
+
+/// Vertex → its wedge when all corners of each vertex share one (no seam
+/// anywhere: positions-only input), else `None`. A vertex in no triangle
+/// gets `u32::MAX`.
+pub(crate) fn vertex_wedges(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> Option<Vec<u32>> {
     let nv = tris.iter().flatten().max().map_or(0, |&v| v as usize + 1);
-    let mut first: Vec<Option<u32>> = vec![None; nv];
+    let mut first: Vec<u32> = vec![u32::MAX; nv];
     for (t, w) in tris.iter().zip(wedges) {
         for (&v, &x) in t.iter().zip(w) {
             match &mut first[v as usize] {
-                Some(y) if *y != x => return false,
-                Some(_) => {}
-                slot => *slot = Some(x),
+                slot if *slot == u32::MAX => *slot = x,
+                y if *y != x => return None,
+                _ => {}
             }
         }
     }
-    true
+    Some(first)
 }
 
 /// The sectors of `v0`'s live fan: union-find over the fan's triangles,
