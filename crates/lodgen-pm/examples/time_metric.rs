@@ -3,7 +3,8 @@
 //! CPU time, so figures survive a loaded machine), and prints every figure in full so two
 //! builds can be compared bit for bit.
 //!
-//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs]`
+//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs] [bounded]`
+//! (`bounded`: [`MeasureOptions::BOUNDED`] instead of the default)
 
 use std::time::Instant;
 
@@ -25,6 +26,11 @@ fn thread_cpu_ms() -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let runs: usize = args.get(3).map_or(3, |s| s.parse().unwrap());
+    let mopts = if args.get(4).map(String::as_str) == Some("bounded") {
+        MeasureOptions::BOUNDED
+    } else {
+        MeasureOptions::DEFAULT
+    };
     let m = mesh_from_args(&args);
     let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
     let full = lodgen_pm::mesh::prepare(&m.positions, &indices)
@@ -58,19 +64,21 @@ fn main() {
                 let e = r
                     .measure(
                         MeshRef::new(&l.positions, &l.triangles),
-                        &MeasureOptions::DEFAULT,
+                        &mopts,
                     )
                     .unwrap();
                 t[k + 1] = thread_cpu_ms() - t0;
                 if run == 0 {
                     println!(
-                        "level {k}: {} tris  A→B {:e} {:e} {:e} ({})  B→A {:e} {:e} {:e} ({})",
+                        "level {k}: {} tris  A→B {:e} ≤{:e} {:e} {:e} ({})  B→A {:e} ≤{:e} {:e} {:e} ({})",
                         l.triangles.len(),
                         e.a_to_b.max,
+                        e.a_to_b.max_bound,
                         e.a_to_b.mean,
                         e.a_to_b.rms,
                         e.a_to_b.samples,
                         e.b_to_a.max,
+                        e.b_to_a.max_bound,
                         e.b_to_a.mean,
                         e.b_to_a.rms,
                         e.b_to_a.samples
@@ -86,11 +94,8 @@ fn main() {
     let wall = Instant::now();
     let r = Reference::new(MeshRef::new(&full.positions, &full.triangles)).unwrap();
     for l in &levels {
-        r.measure(
-            MeshRef::new(&l.positions, &l.triangles),
-            &MeasureOptions::DEFAULT,
-        )
-        .unwrap();
+        r.measure(MeshRef::new(&l.positions, &l.triangles), &mopts)
+            .unwrap();
     }
     println!(
         "CPU ms (min of {runs}): reference {:.1}, levels {:.1} {:.1} {:.1}, total {:.1}; all threads ({}): {:.1} ms wall",

@@ -471,6 +471,62 @@ fn fast_metric_matches_brute_force_reference() {
     }
 }
 
+/// The bounded maximum ([`MeasureOptions::BOUNDED`]) against the brute-force reference: the
+/// true maximum is at least the reference's (a maximum over points of the surface), so the
+/// certified bound must reach it, and the value found (attained at a point, so never above the
+/// true maximum) must be within the stated tolerance of it: at least
+/// `(reference − 10⁻⁵ · diagonal) / 1.01`. RMS (budgeted area samples) within 3 %.
+#[test]
+fn bounded_maximum_brackets_the_brute_force_maximum() {
+    // a grid with a round hole under a flat square: B→A peaks over the hole's middle, far
+    // from every vertex, and the few area samples (no floor) miss the peak by several %
+    let mut holed = grid(20, |_, _| 0.0);
+    let centre = |t: &[u32; 3]| {
+        let p = t.map(|v| holed.positions[v as usize]);
+        [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
+    };
+    holed
+        .triangles
+        .retain(|t| centre(t).iter().map(|c| (c - 0.5).powi(2)).sum::<f32>() > 0.04);
+    let cases = [
+        (bumpy(24), grid(5, |x, y| 0.05 * x - 0.02 * y), 16, 64.0),
+        (cube(0.5), bumpy(8).translated([-0.5, -0.5, 0.45]), 16, 64.0),
+        (bumpy(9).translated([0.01, 0.0, -0.02]), bumpy(20), 16, 64.0),
+        (holed, grid(1, |_, _| 0.01), 128, 0.0),
+    ];
+    for (i, (a, b, k, floor)) in cases.iter().enumerate() {
+        let opts = MeasureOptions::BOUNDED.with_min_samples_per_triangle(*floor);
+        let r = measure(a.r(), b.r(), &opts).unwrap();
+        let abs = opts.absolute_tolerance * r.diagonal;
+        for (what, fast, (max, rms)) in [
+            ("A→B", r.a_to_b, brute_force(a, b, *k)),
+            ("B→A", r.b_to_a, brute_force(b, a, *k)),
+        ] {
+            let what = format!("case {i} {what}");
+            assert!(
+                fast.max_bound >= max,
+                "{what}: bound {} below {max}",
+                fast.max_bound
+            );
+            assert!(fast.max <= fast.max_bound, "{what}: {fast:?}");
+            assert!(
+                fast.max_bound <= fast.max * (1.0 + opts.tolerance) + abs + 1e-12,
+                "{what}: bound {} not within the tolerance of {}",
+                fast.max_bound,
+                fast.max
+            );
+            assert!(
+                fast.max >= (max - abs) / (1.0 + opts.tolerance),
+                "{what}: {} too far below {max}",
+                fast.max
+            );
+            if *floor > 0.0 {
+                assert_close(fast.rms, rms, 0.03 * rms, &format!("{what} rms"));
+            }
+        }
+    }
+}
+
 /// Measuring against a prepared [`Reference`] is [`measure`], bit for bit, level after level.
 #[test]
 fn reference_equals_measure() {

@@ -396,6 +396,20 @@ impl TriangleBvh {
         Some(best)
     }
 
+    /// Corners of the triangle in leaf slot `slot` (a slot returned by a query).
+    #[inline]
+    pub(crate) fn slot_triangle(&self, slot: u32) -> [[f64; 3]; 3] {
+        self.tris[slot as usize].map(widen)
+    }
+
+    /// Squared distance from `p` to the triangle in leaf slot `slot` (a slot returned by a
+    /// query), without searching.
+    #[inline]
+    pub(crate) fn slot_distance_squared(&self, p: [f64; 3], slot: u32) -> f64 {
+        let [a, b, c] = self.tris[slot as usize].map(widen);
+        distance_squared(p, closest_point_on_triangle(p, a, b, c))
+    }
+
     /// The squared distance from `p` to the surface when it exceeds `floor` (a squared
     /// distance), else `None`; with the slot of the answer, or of `hint` when that triangle
     /// alone shows the distance to be at most `floor` (then nothing else is searched). For a

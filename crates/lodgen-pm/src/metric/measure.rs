@@ -28,7 +28,9 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
+use super::bounded::{bounded_max, Tolerance};
 use super::bvh::TriangleBvh;
+pub use super::options::{MeasureOptions, Method};
 use super::triangle::widen;
 use super::{MeshError, MeshRef};
 
@@ -42,142 +44,6 @@ pub enum MeasureError {
     B(MeshError),
 }
 
-/// Options of the metric.
-///
-/// Default sampling: 2 area samples per triangle of the larger mesh, in each direction, at
-/// least 10,000. For the bunny (69,451 triangles) against any coarser level that is 138,902
-/// area samples per direction plus the vertices (34,834 on the original side), about 310,000
-/// distance queries in all. Why 2: the samples are then about half the finer mesh's mean edge
-/// length apart (an equilateral triangle of edge e holding 2 samples gives a spacing of
-/// √(0.433e²/2) ≈ 0.47e), so any feature the fine mesh can represent is hit by several samples.
-/// Measured on the bunny against a 1,454-triangle clustering of it (example `measure_bunny`):
-/// RMS is 0.4709 % of the diagonal at 2 per triangle and 0.4710 % at 32; the Hausdorff estimate
-/// is 2.56 % at 2 and 2.62 % at 32 (a maximum over samples only creeps up with density), for
-/// 16 times the cost.
-///
-/// Huge meshes: above [`Self::full_rate_triangles`] triangles the area samples grow with the
-/// square root of the triangle count instead (see [`Self::area_sample_count`]): 1.08 M per
-/// direction for the 1.1 M-triangle subdivided bunny instead of 2.2 M, 2.2 M for 4.4 M triangles
-/// instead of 8.9 M. Every vertex is still measured. What this can miss: in the original → level
-/// direction little, since the distance from a point of a fine flat triangle to the nearest
-/// triangle of the level is convex along it and so peaks at a vertex, all of which are measured;
-/// in the level → original direction, a spike or pit of the original narrower than the sample
-/// spacing (√(area / samples), about 1.4 fine-triangle edges at 4.4 M) and away from the level's
-/// vertices, so the Hausdorff figure of such a mesh is a slightly lower estimate. Set
-/// `full_rate_triangles` to `usize::MAX` for the full rate at any size.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
-pub struct MeasureOptions {
-    /// Area samples per direction, per triangle of the mesh with more triangles. Negative or
-    /// NaN counts as 0.
-    ///
-    /// Default value: 2.0.
-    pub samples_per_triangle: f64,
-    /// Lower bound on the area samples per direction, so that tiny meshes (a 12-triangle cube)
-    /// are still sampled densely.
-    ///
-    /// Default value: 10,000.
-    pub min_samples: usize,
-    /// Cap on that lower bound, per triangle of the larger mesh: a 12-triangle card is sampled
-    /// 768 times per direction, not 10,000 (plus every vertex). 64 samples per triangle put
-    /// the spacing at an eighth of the triangle's size; without the cap a scene of many small
-    /// meshes (a game level: 947 of 1,000 meshes under 157 triangles) spent ~60 % of its run
-    /// measuring them. The cap changes nothing from 157 triangles up.
-    /// [`MeasureOptions::with_min_samples`] removes it (an explicit bound is taken as given).
-    ///
-    /// Default value: 64.0.
-    pub min_samples_per_triangle: f64,
-    /// Triangle count (of the larger mesh) up to which area samples are
-    /// `samples_per_triangle` per triangle; above it they grow with the square root of the
-    /// count (see the type's documentation for what that can miss).
-    ///
-    /// Default value: 262,144 (2¹⁸).
-    pub full_rate_triangles: usize,
-    /// Also measure from every vertex the sampled mesh's triangles use (counted in the maximum
-    /// only, see [`Distance`]). Vertices are where a fine mesh's extremes usually are.
-    ///
-    /// Default value: true.
-    pub vertex_samples: bool,
-    /// Seed of the sample positions. Results are a pure function of the meshes and the options.
-    ///
-    /// Default value: `0x6c6f_6467_656e` ("lodgen").
-    pub seed: u64,
-}
-
-impl MeasureOptions {
-    pub const DEFAULT: MeasureOptions = MeasureOptions {
-        samples_per_triangle: 2.0,
-        min_samples: 10_000,
-        min_samples_per_triangle: 64.0,
-        full_rate_triangles: 1 << 18,
-        vertex_samples: true,
-        seed: 0x6c6f_6467_656e,
-    };
-
-    pub fn with_samples_per_triangle(mut self, samples_per_triangle: f64) -> Self {
-        self.samples_per_triangle = samples_per_triangle;
-        self
-    }
-
-    /// At least `min_samples` area samples per direction, whatever the meshes' size (the
-    /// per-triangle cap, [`MeasureOptions::min_samples_per_triangle`], is lifted).
-    pub fn with_min_samples(mut self, min_samples: usize) -> Self {
-        self.min_samples = min_samples;
-        self.min_samples_per_triangle = f64::INFINITY;
-        self
-    }
-
-    pub fn with_min_samples_per_triangle(mut self, min_samples_per_triangle: f64) -> Self {
-        self.min_samples_per_triangle = min_samples_per_triangle;
-        self
-    }
-
-    pub fn with_full_rate_triangles(mut self, full_rate_triangles: usize) -> Self {
-        self.full_rate_triangles = full_rate_triangles;
-        self
-    }
-
-    pub fn with_vertex_samples(mut self, vertex_samples: bool) -> Self {
-        self.vertex_samples = vertex_samples;
-        self
-    }
-
-    pub fn with_seed(mut self, seed: u64) -> Self {
-        self.seed = seed;
-        self
-    }
-
-    /// Area samples per direction for meshes of `tris_a` and `tris_b` triangles: with
-    /// `t = max(tris_a, tris_b)` and `k = full_rate_triangles`,
-    /// `samples_per_triangle × (t if t ≤ k, else √(k·t))`, at least
-    /// `min(min_samples, min_samples_per_triangle × t)`.
-    pub fn area_sample_count(&self, tris_a: usize, tris_b: usize) -> usize {
-        let per = if self.samples_per_triangle > 0.0 {
-            self.samples_per_triangle
-        } else {
-            0.0
-        };
-        let t = tris_a.max(tris_b) as f64;
-        let k = self.full_rate_triangles as f64;
-        let effective = if t <= k { t } else { (k * t).sqrt() };
-        // `as` saturates for huge values.
-        let n = (per * effective).ceil() as usize;
-        let floor = if self.min_samples_per_triangle >= 0.0 {
-            // `as` saturates (infinity: no cap)
-            (self.min_samples_per_triangle * t).ceil() as usize
-        } else {
-            0
-        };
-        n.max(self.min_samples.min(floor))
-    }
-}
-
-impl Default for MeasureOptions {
-    fn default() -> Self {
-        Self::DEFAULT
-    }
-}
-
 /// One-sided distance from the points of one mesh to the surface of another.
 ///
 /// `max` is over every sample (area samples and vertices); `mean` and `rms` are over the
@@ -188,6 +54,10 @@ impl Default for MeasureOptions {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Distance {
     pub max: f64,
+    /// An upper bound on the true maximum over the whole surface: with [`Method::Bounded`]
+    /// `max ≤ true maximum ≤ max_bound` (up to rounding); infinite when not known
+    /// ([`Method::Sampled`], whose `max` is a lower estimate).
+    pub max_bound: f64,
     pub mean: f64,
     pub rms: f64,
     /// Points measured: area samples plus vertices.
@@ -198,6 +68,7 @@ impl Distance {
     /// No points measured.
     pub const NONE: Distance = Distance {
         max: 0.0,
+        max_bound: 0.0,
         mean: 0.0,
         rms: 0.0,
         samples: 0,
@@ -279,8 +150,13 @@ pub fn measure(
         || {
             let samples_a = SampleSet::new(a);
             let bvh_b = TriangleBvh::build_validated(b);
-            let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
-            measure_from(a, &samples_a, &bvh_b, n, opts.vertex_samples, opts.seed)
+            let plan = Plan::new(
+                opts,
+                a.triangles.len(),
+                b.triangles.len(),
+                a.bbox_diagonal(),
+            );
+            measure_from(a, &samples_a, &bvh_b, &plan)
         },
     );
     let b_to_a = reference.b_to_a(b, opts);
@@ -343,8 +219,8 @@ impl<'a> Reference<'a> {
         let (a_to_b, b_to_a) = rayon::join(
             || {
                 let bvh_b = TriangleBvh::build_validated(b);
-                let n = opts.area_sample_count(a.triangles.len(), b.triangles.len());
-                measure_from(a, &self.samples, &bvh_b, n, opts.vertex_samples, opts.seed)
+                let plan = Plan::new(opts, a.triangles.len(), b.triangles.len(), self.diagonal);
+                measure_from(a, &self.samples, &bvh_b, &plan)
             },
             || self.b_to_a(b, opts),
         );
@@ -358,15 +234,14 @@ impl<'a> Reference<'a> {
     /// B→A for a validated `b`. A different random stream than A→B, so that measuring a mesh
     /// against itself does not sample the same points twice.
     fn b_to_a(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> Distance {
-        let n = opts.area_sample_count(self.mesh.triangles.len(), b.triangles.len());
-        measure_from(
-            b,
-            &SampleSet::new(b),
-            &self.bvh,
-            n,
-            opts.vertex_samples,
-            opts.seed ^ 0xb5ad_4ece_da1c_e2a9,
-        )
+        let mut plan = Plan::new(
+            opts,
+            self.mesh.triangles.len(),
+            b.triangles.len(),
+            self.diagonal,
+        );
+        plan.seed ^= 0xb5ad_4ece_da1c_e2a9;
+        measure_from(b, &SampleSet::new(b), &self.bvh, &plan)
     }
 }
 
@@ -381,15 +256,8 @@ pub fn one_sided(
     opts: &MeasureOptions,
 ) -> Result<Distance, MeshError> {
     from.validate()?;
-    let n = opts.area_sample_count(from.triangles.len(), to.len());
-    Ok(measure_from(
-        from,
-        &SampleSet::new(from),
-        to,
-        n,
-        opts.vertex_samples,
-        opts.seed,
-    ))
+    let plan = Plan::new(opts, from.triangles.len(), to.len(), from.bbox_diagonal());
+    Ok(measure_from(from, &SampleSet::new(from), to, &plan))
 }
 
 /// Sample indices per unit of parallel work. Fixed (never derived from the thread count), so
@@ -629,27 +497,104 @@ impl SampleSet {
     }
 }
 
-/// The one-sided measurement from the validated mesh `from`, whose [`SampleSet`] is `set`, to
-/// the surface in `to`.
-fn measure_from(
-    from: MeshRef<'_>,
-    set: &SampleSet,
-    to: &TriangleBvh,
+/// How one direction is measured: the options and what they come to for two meshes.
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    method: Method,
     area_samples: usize,
     vertex_samples: bool,
     seed: u64,
-) -> Distance {
+    tolerance: Tolerance,
+}
+
+impl Plan {
+    /// The plan for meshes of `tris_a` and `tris_b` triangles, `diagonal` being the original's.
+    fn new(opts: &MeasureOptions, tris_a: usize, tris_b: usize, diagonal: f64) -> Plan {
+        let nonneg = |x: f64| if x > 0.0 { x } else { 0.0 };
+        Plan {
+            method: opts.method,
+            area_samples: opts.area_sample_count(tris_a, tris_b),
+            vertex_samples: opts.vertex_samples,
+            seed: opts.seed,
+            tolerance: Tolerance {
+                relative: nonneg(opts.tolerance),
+                absolute: nonneg(opts.absolute_tolerance) * diagonal,
+            },
+        }
+    }
+}
+
+/// The one-sided measurement from the validated mesh `from`, whose [`SampleSet`] is `set`, to
+/// the surface in `to`.
+fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Plan) -> Distance {
     if from.triangles.is_empty() {
         return Distance::NONE;
     }
+    let area = area_samples(from, set, to, plan.area_samples, plan.seed);
+    let vertex = |i: usize, _: &mut usize| widen(from.positions[set.vertices[i] as usize]);
+    let stats_of = |stats: &Partial| {
+        if stats.count > 0 {
+            let n = stats.count as f64;
+            (stats.sum / n, (stats.sum2 / n).sqrt())
+        } else {
+            (0.0, 0.0)
+        }
+    };
+    if plan.method == Method::Bounded {
+        // without area (only zero-area triangles) mean and RMS are over the vertices
+        let stats = if area.count > 0 {
+            area
+        } else {
+            measure_points(set.vertices.len(), to, vertex)
+        };
+        let max = bounded_max(from, &set.order, to, stats.max2, plan.tolerance);
+        let (mean, rms) = stats_of(&stats);
+        return Distance {
+            max: max.max2.sqrt(),
+            max_bound: max.bound2.sqrt(),
+            mean,
+            rms,
+            samples: stats.count + max.queries,
+        };
+    }
+    let vertices = if plan.vertex_samples {
+        if area.count > 0 {
+            // Vertices only count towards the maximum: those nearer than it need not be
+            // measured exactly (see `max_above`).
+            max_above(set.vertices.len(), to, area.max2, vertex)
+        } else {
+            measure_points(set.vertices.len(), to, vertex)
+        }
+    } else {
+        Partial::ZERO
+    };
+    let (mean, rms) = stats_of(if area.count > 0 { &area } else { &vertices });
+    Distance {
+        max: area.max2.max(vertices.max2).sqrt(),
+        max_bound: f64::INFINITY,
+        mean,
+        rms,
+        samples: area.count + vertices.count,
+    }
+}
+
+/// `count` stratified area samples of the validated, non-empty mesh `from` (whose
+/// [`SampleSet`] is `set`) measured against `to`; none when `from` has no area.
+fn area_samples(
+    from: MeshRef<'_>,
+    set: &SampleSet,
+    to: &TriangleBvh,
+    count: usize,
+    seed: u64,
+) -> Partial {
     let nt = from.triangles.len();
     let corners = |t: u32| from.triangles[t as usize].map(|v| widen(from.positions[v as usize]));
     let (order, cumulative) = (&set.order, &set.cumulative);
     let total = cumulative.last().copied().unwrap_or(0.0);
-    let area_samples = if total > 0.0 { area_samples } else { 0 };
-    let area = measure_points(area_samples, to, |i, cursor| {
+    let count = if total > 0.0 { count } else { 0 };
+    measure_points(count, to, |i, cursor| {
         let k = 3 * i as u64;
-        let s = (i as f64 + unit(splitmix64(seed, k))) / area_samples as f64 * total;
+        let s = (i as f64 + unit(splitmix64(seed, k))) / count as f64 * total;
         // Position along the curve: the first triangle whose cumulative area exceeds s (so
         // zero-area triangles are never chosen). Positions rise within a chunk, so after one
         // binary search per chunk the cursor only walks forward.
@@ -669,31 +614,5 @@ fn measure_from(
             r2 = 1.0 - r2;
         }
         std::array::from_fn(|j| a[j] + r1 * (b[j] - a[j]) + r2 * (c[j] - a[j]))
-    });
-    let vertices = if vertex_samples {
-        let list = &set.vertices;
-        let vertex = |i: usize, _: &mut usize| widen(from.positions[list[i] as usize]);
-        if area.count > 0 {
-            // Vertices only count towards the maximum: those nearer than it need not be
-            // measured exactly (see `max_above`).
-            max_above(list.len(), to, area.max2, vertex)
-        } else {
-            measure_points(list.len(), to, vertex)
-        }
-    } else {
-        Partial::ZERO
-    };
-    let stats = if area.count > 0 { area } else { vertices };
-    let (mean, rms) = if stats.count > 0 {
-        let n = stats.count as f64;
-        (stats.sum / n, (stats.sum2 / n).sqrt())
-    } else {
-        (0.0, 0.0)
-    };
-    Distance {
-        max: area.max2.max(vertices.max2).sqrt(),
-        mean,
-        rms,
-        samples: area.count + vertices.count,
-    }
+    })
 }

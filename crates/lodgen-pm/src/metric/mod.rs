@@ -23,8 +23,10 @@
 
 use thiserror::Error;
 
+mod bounded;
 pub mod bvh;
 pub mod measure;
+mod options;
 mod triangle;
 
 pub use bvh::TriangleBvh;

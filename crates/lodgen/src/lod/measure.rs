@@ -73,6 +73,7 @@ impl<'a> Measurer<'a> {
             .fold(0.0, f64::max);
         let d = Distance {
             max: e,
+            max_bound: f64::INFINITY,
             mean: f64::NAN,
             rms: f64::NAN,
             samples: 0,
@@ -90,6 +91,7 @@ impl<'a> Measurer<'a> {
     fn exact_zero(&self) -> ErrorReport {
         let d = Distance {
             max: 0.0,
+            max_bound: 0.0,
             mean: 0.0,
             rms: 0.0,
             samples: 0,
