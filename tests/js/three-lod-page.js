@@ -45,19 +45,43 @@ function draw() {
   return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2 };
 }
 
-function indexHash(g) {
-  // FNV-1a 32 over the drawn indices as little-endian u32 (view.rs index_hash)
-  const idx = g.index.array, n = g.drawRange.count === Infinity ? idx.length : g.drawRange.count;
+// FNV-1a 32 over u32 words, little-endian (view.rs index_hash / attribute_hash)
+function fnv() {
   let h = 0x811c9dc5;
-  for (let i = 0; i < n; i++) {
-    let v = idx[i];
-    for (let b = 0; b < 4; b++) {
-      h ^= v & 0xff;
-      h = Math.imul(h, 0x01000193) >>> 0;
-      v >>>= 8;
-    }
+  return {
+    put(v) {
+      for (let b = 0; b < 4; b++) {
+        h ^= v & 0xff;
+        h = Math.imul(h, 0x01000193) >>> 0;
+        v >>>= 8;
+      }
+    },
+    value: () => h >>> 0,
+  };
+}
+
+// The hash of the loader's index state (vertex ids of the drawn triangles).
+function indexHash(p) {
+  const f = fnv();
+  for (let i = 0; i < 3 * p.nt; i++) f.put(p.indices[i]);
+  return f.value();
+}
+
+// With wedges: each drawn corner's group and the values in the geometry's
+// attributes (f32 bits), channels in the stream's order; null when a
+// channel is not drawn.
+function attributeHash(p) {
+  const w = p.decoder.header.wedges;
+  if (!w) return null;
+  const drawn = w.channels.map((c) => p.channels.find((x) => x.c === c));
+  if (drawn.some((x) => !x)) return null;
+  const bits = drawn.map((x) => new Uint32Array(x.attr.array.buffer));
+  const f = fnv();
+  for (let c = 0; c < 3 * p.nt; c++) {
+    f.put(p.decoder.wgroups[p.cw[c]]);
+    drawn.forEach((x, i) => { for (let j = 0; j < x.c.components; j++) f.put(bits[i][c * x.c.components + j]); });
   }
-  return h >>> 0;
+  return f.value();
 }
 
 function clear() {
@@ -82,7 +106,8 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true } = 
     const d = draw();
     const t = t0() - start; // drawn (the hash below is the check's, not the loader's)
     events.push({ level: e.level, records: e.records, triangles: e.triangles, drawn: d.triangles, variance: d.variance,
-      hash: hash ? indexHash(p.geometry) : 0, t });
+      hash: hash ? indexHash(p) : 0, attr: hash ? attributeHash(p) : null,
+      attributes: Object.keys(p.geometry.attributes).sort().join(' '), t });
   });
   await p.refine(stopAt);
   if (keep) window.progressive = p;

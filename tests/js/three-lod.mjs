@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // lodgen's three.js loader (crates/lodgen/web/three) in headless Chromium.
 //
-//   node three-lod.mjs --lodgen BIN FILE.glb [--out DIR]      (or env LODGEN_BIN)
+//   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--out DIR]      (or env LODGEN_BIN)
 //
 // FILE.glb is a `lodgen --progressive` output. Expectations come from
 // `BIN view --print-levels FILE.glb` (each level's records, triangles and
@@ -15,6 +15,10 @@
 // the progressive plugin, through three-gltf-extensions' MSFT_lod plugin with
 // the coverageDistance hook, is a THREE.LOD with every level (its triangle
 // counts), switching level where the file's MSFT_screencoverage says.
+// ATTR.glb (a stream with wedges, e.g. spot.obj's UVs and normals): every
+// level draws the level's triangles, index hash and corner attribute hash
+// (each corner's group and drawn attribute values, `attributeHash`), with
+// the streamed UVs and normals as three.js attributes.
 // Exit 0 on success, 1 on failure, 2 on bad usage.
 
 import { execFileSync } from 'node:child_process';
@@ -40,6 +44,7 @@ function parseArgs(argv) {
     const a = argv[i];
     if (a === '--lodgen') o.lodgen = argv[++i];
     else if (a === '--out') o.out = path.resolve(argv[++i]);
+    else if (a === '--attributes') o.attributes = argv[++i];
     else if (a.startsWith('-')) usage(`unknown option ${a}`);
     else o.files.push(a);
   }
@@ -62,6 +67,7 @@ async function main() {
       body: await bundle('three-lod-page.js', ['../../crates/lodgen/web/three/index.js', '../../crates/lodgen/web/three/lgpm.js']),
     },
     '/model.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]) },
+    ...(o.attributes ? { '/attributes.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.attributes) } } : {}),
   };
   const server = await startServer(routes, requests);
   const base = `http://127.0.0.1:${server.address().port}`;
@@ -110,6 +116,24 @@ async function main() {
         `stopped at level ${mid}: ${last.records} records, ${last.drawn} triangles drawn (` +
           `${stopBytes} stream bytes read; to the finest ${fullBytes})`);
       check(stopBytes < fullBytes, 'stopping early fetches fewer bytes of the stream');
+    }
+
+    // a stream with attributes: drawn with them, exactly
+    if (o.attributes) {
+      const want = JSON.parse(execFileSync(o.lodgen, ['view', '--print-levels', o.attributes], { encoding: 'utf8' })).levels;
+      const a = await page.evaluate(() => window.runProgressive('/attributes.glb'));
+      check(a.events.length === want.length, `attributes: ${a.events.length} level events (expected ${want.length})`);
+      a.events.forEach((e, i) => {
+        const lv = want[want.length - 1 - i];
+        if (!lv) return;
+        check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash && e.attr === lv.attributeHash,
+          `attributes: level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash}, corner attribute hash ` +
+            `${e.attr} (expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.attributeHash}); attributes ${e.attributes}`);
+      });
+      const last = a.events[a.events.length - 1];
+      check(/\bnormal\b/.test(last.attributes) && /\buv\b/.test(last.attributes) && last.variance > MIN_VARIANCE,
+        `attributes: the finest level draws streamed normals and UVs (${last.attributes}), not blank (variance ${last.variance.toFixed(1)})`);
+      await page.screenshot({ path: path.join(o.out, 'three-progressive-attributes.png') });
     }
 
     // without the plugin: three-gltf-extensions' MSFT_lod, coverage hook

@@ -3,8 +3,8 @@
 //! mesh, over a throttled local line (10 Mbit/s, 50 ms latency, set in the
 //! server), in headless Chromium with three.js (`tests/js/stream-bench.mjs`).
 //!
-//! Per mesh (the bunny and the 1.1M-triangle subdivided bunny; `--quick`:
-//! the bunny only) it writes, with the release `lodgen`:
+//! Per mesh (the bunny, spot and the 1.1M-triangle subdivided bunny;
+//! `--quick`: the bunny only) it writes, with the release `lodgen`:
 //! * plain: `lodgen X --levels 100% --quantize --compress meshopt`, loaded by
 //!   GLTFLoader + MeshoptDecoder until drawn;
 //! * progressive: `lodgen X --levels 100%,50%,10%,2% --progressive
@@ -13,7 +13,8 @@
 //!   detail),
 //!
 //! and prints the table the README's Streaming section quotes, with the
-//! stream's bytes against the plain file's.
+//! stream's bytes against the plain file's and each time's floor (one
+//! latency + the bytes needed at the line rate).
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -32,11 +33,24 @@ fn lodgen(exe: &Path, input: &Path, output: &Path, args: &[&str]) -> Result<()> 
     Ok(())
 }
 
-/// Bytes of the `LODGEN_progressive` stream in a written file.
-fn stream_bytes(path: &Path) -> Result<usize> {
-    let (_, stream) = lodgen::progressive::read_file(path)?.context("no LODGEN_progressive")?;
-    Ok(stream.len())
+/// Bytes of the `LODGEN_progressive` stream in a written GLB, and the
+/// bytes before it in the file (the JSON and, as lodgen writes it, the
+/// coarsest level: what a client needs for its first pixel).
+fn stream_bytes(path: &Path) -> Result<(usize, usize)> {
+    let bytes = std::fs::read(path)?;
+    let (root, bin) = lodgen::progressive::parse_glb(&bytes)?;
+    let found = lodgen::progressive::find(&root)?.context("no LODGEN_progressive")?;
+    let (_, off, len) = found.range;
+    Ok((len, bytes.len() - bin.len() + off))
 }
+
+/// The time (ms) `bytes` take on the bench's line, one latency included.
+fn line_ms(bytes: usize) -> f64 {
+    LATENCY_MS + bytes as f64 * 8.0 / (MBIT * 1e6) * 1e3
+}
+
+const MBIT: f64 = 10.0;
+const LATENCY_MS: f64 = 50.0;
 
 pub fn run(args: &[String]) -> Result<()> {
     let mut quick = false;
@@ -67,11 +81,14 @@ pub fn run(args: &[String]) -> Result<()> {
     let meshes: &[&str] = if quick {
         &["bunny"]
     } else {
-        &["bunny", "bunny-1m"]
+        &["bunny", "spot", "bunny-1m"]
     };
     let mut rows = Vec::new();
     for id in meshes {
-        let input = crate::e2e::mesh_file(id)?;
+        let input = match *id {
+            "spot" => crate::shared_assets()?.join("spot.obj"),
+            _ => crate::e2e::mesh_file(id)?,
+        };
         let plain = dir.join(format!("{id}-plain.glb"));
         let prog = dir.join(format!("{id}-progressive.glb"));
         let q = ["--quantize", "--compress", "meshopt"];
@@ -90,31 +107,62 @@ pub fn run(args: &[String]) -> Result<()> {
             .arg(&prog)
             .arg("--plain")
             .arg(&plain)
-            .args(["--name", id, "--runs", &runs.to_string(), "--json"])
+            .args(["--name", id, "--runs", &runs.to_string()])
+            .args([
+                "--mbit",
+                &MBIT.to_string(),
+                "--latency-ms",
+                &LATENCY_MS.to_string(),
+            ])
+            .arg("--json")
             .arg(&json)
             .current_dir(&root)
             .status()?;
         anyhow::ensure!(status.success(), "stream-bench.mjs failed on {id}");
         let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json)?)?;
-        let plain_bytes = std::fs::metadata(&plain)?.len() as f64;
-        rows.push((id.to_string(), r, stream_bytes(&prog)? as f64 / plain_bytes));
+        let plain_bytes = std::fs::metadata(&plain)?.len() as usize;
+        let (stream, before) = stream_bytes(&prog)?;
+        let floors = [
+            line_ms(plain_bytes),
+            line_ms(before),
+            line_ms(before + stream),
+        ];
+        rows.push((
+            id.to_string(),
+            r,
+            stream as f64 / plain_bytes as f64,
+            floors,
+        ));
     }
     println!(
-        "\nthrottled line: 10 Mbit/s, 50 ms latency per response; three.js in headless Chromium; median of {runs}"
+        "\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; median of {runs}"
     );
+    println!("floors: one latency + the bytes needed at the line rate (plain: the file; first pixel: JSON + coarsest level; full: + stream), no parsing or drawing");
     println!(
-        "{:<9} {:>11} {:>12} {:>14} {:>14} {:>10} {:>9}",
-        "mesh", "plain ms", "stream/plain", "first px ms", "full ms", "first/pl", "full/pl"
+        "{:<9} {:>9} {:>12} {:>9} {:>12} {:>13} {:>10} {:>9} {:>11} {:>9}",
+        "mesh",
+        "plain ms",
+        "stream/plain",
+        "floor",
+        "first px ms",
+        "floor",
+        "full ms",
+        "floor",
+        "first/pl",
+        "full/pl"
     );
-    for (id, r, ratio) in &rows {
+    for (id, r, ratio, [plain, first, full]) in &rows {
         let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
         println!(
-            "{:<9} {:>11.0} {:>11.2}× {:>14.0} {:>14.0} {:>9.2}× {:>8.2}×",
+            "{:<9} {:>9.0} {:>11.2}× {:>9.0} {:>12.0} {:>13.0} {:>10.0} {:>9.0} {:>10.2}× {:>8.2}×",
             id,
             f("plainMs"),
             ratio,
+            plain,
             f("firstPixelMs"),
+            first,
             f("fullDetailMs"),
+            full,
             f("firstRatio"),
             f("fullRatio"),
         );

@@ -6,7 +6,9 @@
 //! triangles and index hash against `lodgen view --print-levels`, stopping
 //! at a level, non-blank screenshots (`target/test-out/three/`), and the same
 //! file through three-gltf-extensions' MSFT_lod plugin with the
-//! `coverageDistance` hook.
+//! `coverageDistance` hook; with the shared assets, spot.obj's stream (UVs
+//! as wedges) drawn with its attributes, each level's corner attribute hash
+//! against Rust's.
 //!
 //! Needs `node`, Chromium and `tests/js/node_modules`; without them the test
 //! says so and passes, unless `LODGEN_BROWSER_TEST=1` or `CI=true`.
@@ -42,16 +44,29 @@ fn three_loader_streams_every_level_in_headless_chromium() {
         .status()
         .unwrap();
     assert!(status.success());
+    // a stream with wedges (spot.obj's UVs), drawn with its attributes
+    let spot = dir.path().join("spot.glb");
+    let mut extra = Vec::new();
+    if let Some(input) = lodgen::assets::shared_asset("spot.obj") {
+        let status = Command::new(bin)
+            .arg(&input)
+            .arg("-o")
+            .arg(&spot)
+            .args(["--levels", "100%,50%,10%,2%", "--progressive", "--quantize"])
+            .args(["--compress", "meshopt", "--quiet"])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        extra = vec!["--attributes", spot.to_str().unwrap()];
+    }
     let out = root().join("target/test-out/three");
     std::fs::create_dir_all(&out).unwrap();
-    browser::run_script(
-        "three-lod.mjs",
-        &[
-            "--lodgen",
-            bin,
-            glb.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-    );
+    let args = [
+        "--lodgen",
+        bin,
+        glb.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    browser::run_script("three-lod.mjs", &[&args[..], &extra].concat());
 }

@@ -252,19 +252,25 @@ export class ProgressiveMesh extends EventDispatcher {
     // (KHR_mesh_quantization, q - s) or floats
     this.quantized = acc.componentType === 5122 && acc.normalized && h.bits === 16;
     const g = new BufferGeometry();
-    const pos = this.quantized ? new Int16Array(h.totalVertices * 3) : new Float32Array(h.totalVertices * 3);
-    g.setAttribute("position", new BufferAttribute(pos, 3, this.quantized));
-    g.setIndex(new BufferAttribute(new Uint32Array(Math.max(3, h.totalTriangles * 3)), 1));
-    g.setAttribute("normal", new BufferAttribute(new Int8Array(h.totalVertices * 3), 3, true));
+    const Pos = this.quantized ? Int16Array : Float32Array;
+    // the index state (vertex ids) and each vertex's position
+    this.indices = new Uint32Array(Math.max(3, h.totalTriangles * 3));
+    this.vpos = new Pos(h.totalVertices * 3);
+    if (h.wedges) this.cornerGeometry(g, Pos);
+    else {
+      g.setAttribute("position", new BufferAttribute(this.vpos, 3, this.quantized));
+      g.setIndex(new BufferAttribute(this.indices, 1));
+      g.setAttribute("normal", new BufferAttribute(new Int8Array(h.totalVertices * 3), 3, true));
+      g.attributes.normal.setUsage(35048);
+      g.index.setUsage(35048);
+    }
     g.attributes.position.setUsage(35048); // DYNAMIC_DRAW
-    g.attributes.normal.setUsage(35048);
-    g.index.setUsage(35048);
     // every level's positions lie in the grid's box: one bounding sphere
     g.boundingSphere = this.quantized ? new Sphere(new Vector3(0, 0, 0), Math.sqrt(3))
       : new Sphere(new Vector3(...h.center), h.half * Math.sqrt(3));
     this.geometry = g;
     this.writeVertices(0, h.baseVertices);
-    g.index.array.set(d.baseTri, 0);
+    this.indices.set(d.baseTri, 0);
     this.nt = h.baseTriangles;
     this.finishUpdate(0, 0, 0, h.baseTriangles * 3);
     if (this.mesh) {
@@ -281,13 +287,70 @@ export class ProgressiveMesh extends EventDispatcher {
     this.timeline.push({ what, t: performance.now() - this.t0, bytes: this.received });
   }
 
+  // A stream with wedges: one vertex per corner (a wedge may sit at two
+  // vertices), its position and the streamed attributes three.js draws
+  // (NORMAL, TEXCOORD_0..3, COLOR_0, TANGENT) copied from the corner's
+  // vertex and wedge at each level.
+  cornerGeometry(g, Pos) {
+    const d = this.decoder, h = d.header, n = 3 * h.totalTriangles;
+    const names = { NORMAL: "normal", TEXCOORD_0: "uv", TEXCOORD_1: "uv1", TEXCOORD_2: "uv2", TEXCOORD_3: "uv3", COLOR_0: "color", TANGENT: "tangent" };
+    this.cw = new Uint32Array(n);
+    this.cw.set(d.baseCW, 0);
+    g.setAttribute("position", new BufferAttribute(new Pos(n * 3), 3, this.quantized));
+    this.channels = [];
+    for (const c of h.wedges.channels) {
+      const name = names[c.name];
+      if (!name || g.attributes[name]) continue;
+      g.setAttribute(name, new BufferAttribute(new Float32Array(n * c.components), c.components));
+      g.attributes[name].setUsage(35048);
+      this.channels.push({ c, attr: g.attributes[name] });
+    }
+    if (!g.attributes.normal) {
+      // none streamed: each corner gets its vertex's computed normal
+      g.setAttribute("normal", new BufferAttribute(new Int8Array(n * 3), 3, true));
+      this.vnormal = new Int8Array(h.totalVertices * 3);
+    }
+  }
+
+  // Corner geometry: every drawn corner's position and attributes.
+  writeCorners() {
+    const g = this.geometry, n = 3 * this.nt, idx = this.indices, cw = this.cw, vp = this.vpos;
+    const pos = g.attributes.position.array, vals = this.decoder.wvals, stride = this.decoder.header.wedges.stride;
+    for (let c = 0; c < n; c++) {
+      const v = 3 * idx[c];
+      pos[3 * c] = vp[v]; pos[3 * c + 1] = vp[v + 1]; pos[3 * c + 2] = vp[v + 2];
+    }
+    for (const { c: ch, attr } of this.channels) {
+      const out = attr.array, k = ch.components;
+      for (let c = 0; c < n; c++) {
+        const from = cw[c] * stride + ch.offset;
+        for (let j = 0; j < k; j++) out[c * k + j] = vals[from + j];
+      }
+    }
+    if (this.vnormal) {
+      const vn = this.computeNormals(this.vnormal), out = g.attributes.normal.array;
+      for (let c = 0; c < n; c++) {
+        const v = 3 * idx[c];
+        out[3 * c] = vn[v]; out[3 * c + 1] = vn[v + 1]; out[3 * c + 2] = vn[v + 2];
+      }
+    }
+    for (const name of Object.keys(g.attributes)) {
+      const a = g.attributes[name];
+      a.clearUpdateRanges();
+      a.addUpdateRange(0, n * a.itemSize);
+      a.needsUpdate = true;
+    }
+    g.setDrawRange(0, n);
+  }
+
   writeVertices(from, to) {
-    const d = this.decoder, h = d.header, a = this.geometry.attributes.position.array, s = h.scale;
+    const d = this.decoder, h = d.header, a = this.vpos, s = h.scale;
     if (this.quantized) for (let i = 3 * from; i < 3 * to; i++) a[i] = d.q[i] - s;
     else for (let v = from; v < to; v++) d.deq(d.q, v, a, 3 * v);
   }
 
   finishUpdate(vFrom, vTo, iFrom, iTo) {
+    if (this.cw) { this.writeCorners(); return; }
     const g = this.geometry, p = g.attributes.position;
     p.clearUpdateRanges();
     g.index.clearUpdateRanges();
@@ -296,14 +359,18 @@ export class ProgressiveMesh extends EventDispatcher {
     p.needsUpdate = true;
     g.index.needsUpdate = true;
     g.setDrawRange(0, 3 * this.nt);
-    this.computeNormals();
+    const normal = g.attributes.normal;
+    this.computeNormals(normal.array);
+    normal.clearUpdateRanges();
+    normal.addUpdateRange(0, 3 * (this.decoder.header.baseVertices + this.applied));
+    normal.needsUpdate = true;
   }
 
   // Area-weighted vertex normals of the drawn triangles, from the grid
   // points (one scale on every axis, so the directions are the positions'),
-  // as snorm8 like `--quantize` writes them; uploaded up to the last vertex.
-  computeNormals() {
-    const d = this.decoder, q = d.q, idx = this.geometry.index.array, n3 = 3 * this.nt;
+  // as snorm8 like `--quantize` writes them, into `out` (3 per vertex).
+  computeNormals(out) {
+    const d = this.decoder, q = d.q, idx = this.indices, n3 = 3 * this.nt;
     const nv = d.header.baseVertices + this.applied;
     const acc = this.normalSums || (this.normalSums = new Float32Array(3 * d.header.totalVertices));
     acc.fill(0, 0, 3 * nv);
@@ -317,7 +384,6 @@ export class ProgressiveMesh extends EventDispatcher {
       acc[b] += nx; acc[b + 1] += ny; acc[b + 2] += nz;
       acc[c] += nx; acc[c + 1] += ny; acc[c + 2] += nz;
     }
-    const normal = this.geometry.attributes.normal, out = normal.array;
     for (let v = 0; v < 3 * nv; v += 3) {
       const x = acc[v], y = acc[v + 1], z = acc[v + 2], len = Math.sqrt(x * x + y * y + z * z);
       const k = len > 0 ? 127 / len : 0;
@@ -325,9 +391,7 @@ export class ProgressiveMesh extends EventDispatcher {
       out[v + 1] = Math.round(y * k);
       out[v + 2] = Math.round(z * k);
     }
-    normal.clearUpdateRanges();
-    normal.addUpdateRange(0, 3 * nv);
-    normal.needsUpdate = true;
+    return out;
   }
 
   // Make sure chunks up to `last` are requested: one HTTP range for every
@@ -410,10 +474,14 @@ export class ProgressiveMesh extends EventDispatcher {
   // faces in one copy, then their corner edits in order; one update range
   // for the vertices and one for the indices.
   applyTo(k) {
-    const d = this.decoder, idx = this.geometry.index.array, a = this.applied;
+    const d = this.decoder, idx = this.indices, cw = this.cw, a = this.applied;
     if (k <= a) return;
     const f0 = 3 * d.fStart[a], f1 = 3 * d.fStart[k];
     idx.set(d.faces0.subarray(f0, f1), f0);
+    if (cw) {
+      cw.set(d.wfaces0.subarray(f0, f1), f0);
+      for (let j = d.cStart[a]; j < d.cStart[k]; j++) cw[d.corners.a[j]] = d.wafter.a[j];
+    }
     let vLo = Infinity, iLo = f0;
     const corners = d.corners.a, cs = d.cStart, base = d.header.baseVertices;
     for (let i = a; i < k; i++) {
@@ -426,8 +494,10 @@ export class ProgressiveMesh extends EventDispatcher {
       }
     }
     this.nt = d.fStart[k];
+    this.mark(`indices ${k}`);
     // vertices: grid points at the chunk's end (the decoder's q)
     this.writeVertices(vLo, base + k);
+    this.mark(`vertices ${k}`);
     this.applied = k;
     this.finishUpdate(vLo, base + k, iLo, f1);
   }
