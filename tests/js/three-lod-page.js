@@ -91,11 +91,13 @@ function clear() {
 const t0 = () => performance.now();
 
 // Progressive: level events with drawn triangles, hash, pixels; timings.
-window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true } = {}) => {
+// `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
+// passed: the stream beyond its base is fetched when `refine` asks).
+window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
-  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: stopAt });
+  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: prefetch === 'none' ? undefined : prefetch });
   scene.add(p.gltf.scene);
   frame(p.gltf.scene);
   // first pixel: the coarse level as GLTFLoader parsed it

@@ -8,9 +8,11 @@
 // index hash). Checks, with three.js, GLTFLoader and MeshoptDecoder from npm:
 // loadProgressive shows the coarsest level first, then one "level" event per
 // MSFT_lod level, coarse to fine, each drawing exactly the level's triangles
-// (renderer.info) with the level's index hash; the GLB is fetched in HTTP
-// range requests and the stream in one range up to the level; stopping at a
-// middle level fetches fewer bytes; screenshots of the coarsest and finest level are
+// (renderer.info) with the level's index hash; the first pixel is the
+// coarsest level; the GLB is read from its start in one request (JSON,
+// coarsest level, stream); stopping at a middle level without prefetch reads
+// the stream's base on that request, the rest up to the level by one range
+// request, and fewer stream bytes; screenshots of the coarsest and finest level are
 // not blank (DIR/three-*.png, default target/test-out). The same file without
 // the progressive plugin, through three-gltf-extensions' MSFT_lod plugin with
 // the coverageDistance hook, is a THREE.LOD with every level (its triangle
@@ -105,17 +107,21 @@ async function main() {
       if (i !== 0) await page.screenshot({ path: file });
     }
 
-    // stop at a middle level: no chunk beyond it is fetched
+    // stop at a middle level, the stream beyond its base asked for only by
+    // refine (no prefetch: a range request): no chunk beyond it is fetched
     if (levels.length >= 3) {
       const mid = Math.floor((levels.length - 1) / 2);
       requests.length = 0;
-      const s = await page.evaluate((m) => window.runProgressive('/model.glb', { stopAt: m }), mid);
+      const s = await page.evaluate((m) => window.runProgressive('/model.glb', { stopAt: m, prefetch: 'none' }), mid);
       const last = s.events[s.events.length - 1];
       const stopBytes = s.received, fullBytes = r.received;
       check(last.records === levels[mid].records && last.drawn === levels[mid].triangles,
         `stopped at level ${mid}: ${last.records} records, ${last.drawn} triangles drawn (` +
           `${stopBytes} stream bytes read; to the finest ${fullBytes})`);
       check(stopBytes < fullBytes, 'stopping early fetches fewer bytes of the stream');
+      const ranged = requests.filter((q) => q.path === '/model.glb');
+      check(ranged.length === 2 && ranged[1].status === 206 && /^bytes=\d+-\d+$/.test(ranged[1].range || ''),
+        `without prefetch, refine fetches the rest of the stream by a range request (${ranged.map((q) => q.range).join(', ')})`);
     }
 
     // a stream with attributes: drawn with them, exactly
