@@ -3,7 +3,7 @@
 //! figures to compare two builds on a loaded machine (minimum and median
 //! CPU time), and the check that a change leaves the output unchanged.
 //!
-//! `cargo run --release -p lodgen-pm --example cpu_simplify [mesh.obj] [subdivisions] [runs] [plain|wedges] [ratio]`
+//! `cargo run --release -p lodgen-pm --example cpu_simplify [mesh.obj] [subdivisions] [runs] [plain|wedges] [ratio] [cluster triangles]`
 //!
 //! `plain` is `simplify` (position only, what `xtask bench` times);
 //! `wedges` is `simplify_with_wedges` with every vertex its own wedge and
@@ -13,6 +13,7 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
 
+use lodgen_pm::metric::{measure, MeasureOptions, MeshRef};
 use lodgen_pm::{simplify, simplify_with_wedges, SimplifyOptions};
 
 #[path = "common/mod.rs"]
@@ -40,9 +41,13 @@ fn main() {
     let m = mesh_from_args(&args);
     let indices = m.indices();
     let n = m.triangles.len();
-    let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+    let partition = args.get(6).map(|s| s.parse::<usize>().unwrap());
+    let opts = SimplifyOptions::DEFAULT
+        .with_target_ratio(ratio)
+        .with_partition(partition);
     let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     let mut digest = 0;
+    let mut last = None;
     for _ in 0..runs {
         let (t, c) = (Instant::now(), cpu_ms());
         let out = if wedges {
@@ -62,13 +67,24 @@ fn main() {
             format!("{s:?}").hash(&mut h);
         }
         digest = h.finish();
+        last = Some(out.pm.base);
     }
     let stat = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         (v[0], v[v.len() / 2])
     };
     let ((wmin, wmed), (cmin, cmed)) = (stat(&mut wall), stat(&mut cpu));
+    let base = last.expect("at least one run");
+    let e = measure(
+        MeshRef::new(&m.positions, &m.triangles),
+        MeshRef::new(&base.positions, &base.triangles),
+        &MeasureOptions::DEFAULT,
+    )
+    .unwrap();
     println!(
-        "{n} tris: wall min {wmin:.1} med {wmed:.1} ms, cpu min {cmin:.1} med {cmed:.1} ms, digest {digest:016x}"
+        "{n} tris: wall min {wmin:.1} med {wmed:.1} ms, cpu min {cmin:.1} med {cmed:.1} ms, digest {digest:016x}; {} tris H {:.4} % RMS {:.4} %",
+        base.triangles.len(),
+        e.hausdorff_percent(),
+        e.rms_percent()
     );
 }
