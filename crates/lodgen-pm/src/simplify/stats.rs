@@ -88,8 +88,8 @@ pub struct Stats {
     pub near_pairs: usize,
     /// Vertices on an open border.
     pub boundary_vertices: usize,
-    /// Vertices that never move (non-manifold, or boundary with
-    /// `Boundary::Locked`).
+    /// Vertices that never move: non-manifold ones (which may still be
+    /// removed into a neighbour) and, with `Boundary::Locked`, the border.
     pub locked_vertices: usize,
     /// Candidates refused, by reason.
     pub rejected: Rejections,
