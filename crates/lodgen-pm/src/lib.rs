@@ -49,7 +49,9 @@ pub use adaptive::{
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
 pub use progressive::{attrfit, levels, stream};
-pub use progressive::{Corner, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
+pub use progressive::{
+    Corner, Corners, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog,
+};
 pub use simplify::{
     Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
     SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT,

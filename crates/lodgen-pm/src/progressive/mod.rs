@@ -26,11 +26,13 @@
 //! ```
 
 pub mod attrfit;
+mod corners;
 pub mod levels;
 #[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
 mod wedgelog;
 
+pub use corners::{CornerIter, Corners};
 pub use wedgelog::{SplitWedges, WedgeLog};
 
 use crate::mesh::Mesh;
@@ -72,9 +74,9 @@ pub struct VertexSplit {
     /// order: two for an interior edge (`fl`, `fr`), one on a border, none
     /// for a non-edge (τ) pair.
     pub faces: SmallVec<[[u32; 3]; 2]>,
-    /// The corners that go from `v1` back to `v0`, sorted (inline up to
-    /// six, which is most splits: no allocation per split).
-    pub corners: SmallVec<[Corner; 6]>,
+    /// The corners that go from `v1` back to `v0`, sorted (packed, inline
+    /// up to six, which is most splits: no allocation per split).
+    pub corners: Corners,
     /// The contraction's quadric error: root mean squared distance from the
     /// new vertex to the planes it carries (mesh units).
     pub error: f32,

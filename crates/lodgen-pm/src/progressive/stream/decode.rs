@@ -6,7 +6,7 @@ use super::topo::{self, Topo, FACE_ESCAPE};
 use super::types::{invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS};
 use super::wedges::{face_corner_order, Rec, Shared, WedgeColumns, WedgeState, NONE};
 use crate::mesh::Mesh;
-use crate::progressive::{Corner, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
+use crate::progressive::{Corners, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
 use smallvec::SmallVec;
 
 /// Bound on preallocation from header counts, so a hostile header cannot
@@ -205,7 +205,7 @@ fn replay(
         st.topo.add_face(&mut st.mesh.triangles, f);
     }
     let held = st.topo.corners(&st.mesh.triangles, v1);
-    let mut corners = SmallVec::new();
+    let mut corners = Corners::new();
     for &k in &held {
         if c.mask.next()? {
             st.topo.move_corner(&mut st.mesh.triangles, k, v1, v0);
@@ -246,7 +246,7 @@ fn replay_wedges(
     layout: &WedgeLayout,
     (tri, fans, rec): (&[[u32; 3]], &[Vec<u32>], Rec),
     first: usize,
-    corners: &[Corner],
+    corners: &Corners,
 ) -> Result<SplitWedges, StreamError> {
     ws.sh.cw.resize(tri.len(), [NONE; 3]);
     for (t, s) in face_corner_order(tri, first, tri.len() - first, rec.v0) {

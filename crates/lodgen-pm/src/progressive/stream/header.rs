@@ -236,7 +236,9 @@ pub(super) fn parse(r: &mut Reader) -> Result<StreamHeader, ReadError> {
         .into());
     }
     let at = r.pos;
-    let total_triangles = r.bounded(max, "total triangle count")? as usize;
+    // below 2^30 like every mesh (`Mesh::validate`): split corners are
+    // packed into 30 bits (`Corners`)
+    let total_triangles = r.bounded((1 << 30) - 1, "total triangle count")? as usize;
     if total_triangles < base_triangles {
         return Err(invalid(at, "total triangles below the base count").into());
     }
