@@ -3,8 +3,9 @@
 //! CPU time, so figures survive a loaded machine), and prints every figure in full so two
 //! builds can be compared bit for bit.
 //!
-//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs] [bounded]`
-//! (`bounded`: [`MeasureOptions::BOUNDED`] instead of the default)
+//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs] [bounded|dense]`
+//! (`bounded`: [`MeasureOptions::BOUNDED`], `dense`: METRO at 64 samples per triangle, instead of
+//! the default)
 
 use std::time::Instant;
 
@@ -26,10 +27,10 @@ fn thread_cpu_ms() -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let runs: usize = args.get(3).map_or(3, |s| s.parse().unwrap());
-    let mopts = if args.get(4).map(String::as_str) == Some("bounded") {
-        MeasureOptions::BOUNDED
-    } else {
-        MeasureOptions::DEFAULT
+    let mopts = match args.get(4).map(String::as_str) {
+        Some("bounded") => MeasureOptions::BOUNDED,
+        Some("dense") => MeasureOptions::METRO.with_samples_per_triangle(64.0),
+        _ => MeasureOptions::DEFAULT,
     };
     let m = mesh_from_args(&args);
     let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();

@@ -517,3 +517,43 @@ fn measure_off_estimates_errors_and_keeps_the_chain_valid() {
     assert!(levels.iter().all(|l| l["rms_percent"].is_null()));
     assert_eq!(level_triangles(&r), vec![1152, 230, 46]);
 }
+
+/// `--measure bounded`: the Hausdorff distance by bounded subdivision is attained at a point
+/// of the surface, so it is at least every sampled estimate up to the tolerance (1 % plus
+/// 10⁻⁵ of the diagonal) — here never below the default's; RMS within 5 % (fewer samples).
+#[test]
+fn measure_bounded_is_at_least_the_sampled_estimate() {
+    let d = tmp("measure-bounded");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let run = |mode: &str| {
+        let rep = d.join(format!("{mode}.json"));
+        let o = lodgen(&[
+            input.to_str().unwrap(),
+            "--measure",
+            mode,
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = report(&rep);
+        assert_eq!(r["meshes"][0]["measured"], true);
+        let levels = r["meshes"][0]["levels"].as_array().unwrap().clone();
+        assert_eq!(level_triangles(&r), vec![1152, 230, 46]);
+        levels
+            .iter()
+            .map(|l| {
+                let f = |k: &str| l[k].as_f64().unwrap();
+                (f("hausdorff_percent"), f("rms_percent"))
+            })
+            .collect::<Vec<_>>()
+    };
+    let (sampled, bounded) = (run("on"), run("bounded"));
+    for (s, b) in sampled.iter().zip(&bounded) {
+        assert!(b.0 >= s.0 / 1.01 - 1e-3, "bounded {b:?} vs sampled {s:?}");
+        assert!(
+            (b.1 - s.1).abs() <= 0.05 * s.1,
+            "bounded {b:?} vs sampled {s:?}"
+        );
+    }
+}

@@ -168,22 +168,60 @@ fn bound_chunk(
     };
     let mut hint: Option<u32> = None;
     let mut stack: Vec<Cell> = Vec::new();
+    let mut recent = Recent::default();
     for &t in tris {
         let p = from.triangles[t as usize].map(|v| widen(from.positions[v as usize]));
-        if let Some(h) = hint {
-            // the previous triangle's nearest triangle alone bounds this one (convexity)
-            let settle = tol.settle2(out.max2);
-            if p.iter().all(|&q| to.slot_distance_squared(q, h) <= settle) {
-                continue;
-            }
+        if recent.settles(p, to, tol.settle2(out.max2)) {
+            continue;
         }
         let c = p.map(|q| exact(to, q, &mut hint, &mut out));
+        for k in &c {
+            recent.push(k.slot);
+        }
         stack.push(Cell::new(c, &[], 0));
         while let Some(cell) = stack.pop() {
             refine(cell, to, tol, &mut out, &mut stack);
         }
     }
     out
+}
+
+/// The nearest triangles of the last corners measured exactly (most recent first), as
+/// candidates that may bound the next triangles without any search.
+#[derive(Clone, Copy, Debug, Default)]
+struct Recent {
+    slots: [u32; CANDIDATES],
+    n: usize,
+}
+
+impl Recent {
+    fn push(&mut self, slot: u32) {
+        let at = self.slots[..self.n].iter().position(|&s| s == slot);
+        let end = at.unwrap_or(self.n.min(CANDIDATES - 1));
+        self.slots.copy_within(0..end, 1);
+        self.slots[0] = slot;
+        if at.is_none() && self.n < CANDIDATES {
+            self.n += 1;
+        }
+    }
+
+    /// True when the candidates bound the triangle `p` within `settle` (squared): one
+    /// candidate near all three corners, or the pieces of [`piece_bound`].
+    fn settles(&self, p: [[f64; 3]; 3], to: &TriangleBvh, settle: f64) -> bool {
+        if self.n == 0 {
+            return false;
+        }
+        let corner = |p| Corner {
+            p,
+            d2: f64::INFINITY,
+            slot: u32::MAX,
+        };
+        let mut cell = Cell::new(p.map(corner), &[], 0);
+        cell.n = 0;
+        cell.cand[..self.n].copy_from_slice(&self.slots[..self.n]);
+        cell.n = self.n as u8;
+        simple_bound(&cell, to, settle) <= settle || piece_bound(&cell, to, settle) <= settle
+    }
 }
 
 /// The exact nearest triangle of `q`, searched from `hint`; raises the maximum.
