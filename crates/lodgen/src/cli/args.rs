@@ -150,7 +150,7 @@ pub struct BuildArgs {
     /// Measure each level's error against the input (`on`: Metro sampling,
     /// whose Hausdorff figure is a lower estimate), find the Hausdorff
     /// distance by bounded subdivision (`bounded`: certified within 1 % plus
-    /// 10⁻⁵ of the diagonal, slower: about 3-6× on the bunny), or skip it for
+    /// 10⁻⁵ of the diagonal; slower: the bunny run takes 4.5× the CPU), or skip it for
     /// speed (`off`): errors and screen coverages then come from the
     /// simplifier's own estimate (the quadric error of the contractions
     /// still in a level), marked `≈` in the table; RMS is not known.
