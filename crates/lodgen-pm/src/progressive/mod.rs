@@ -26,61 +26,18 @@
 //! ```
 
 pub mod attrfit;
-mod corners;
 pub mod levels;
+mod split;
 #[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
 mod wedgelog;
 
-pub use corners::{CornerIter, Corners};
+pub use split::{Corner, CornerIter, Corners, VertexSplit};
 pub use wedgelog::{SplitWedges, WedgeLog};
 
 use crate::mesh::Mesh;
 use crate::util::prefetch;
 use rayon::prelude::*;
-use smallvec::SmallVec;
-
-/// A triangle corner: `triangles[triangle][slot]`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub struct Corner {
-    /// The triangle.
-    pub triangle: u32,
-    /// Which of its three corners (0, 1 or 2).
-    pub slot: u8,
-}
-
-/// One vertex split: the exact inverse of one contraction.
-///
-/// Applying it to the mesh with `v0` vertices and `t` triangles:
-/// 1. set `v1`'s position to `p1` and append vertex `v0` at `p0`;
-/// 2. append `faces` as triangles `t, t + 1, …`;
-/// 3. set every corner in `corners` (currently `v1`) to `v0`.
-///
-/// Undoing it (a collapse) reverses the three steps, putting `v1` at
-/// `p_merged`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct VertexSplit {
-    /// The vertex that stays (it exists before the split).
-    pub v1: u32,
-    /// The vertex the split restores: always the next vertex index.
-    pub v0: u32,
-    /// `v1`'s position after the split (before the contraction).
-    pub p1: [f32; 3],
-    /// `v1`'s position before the split: the contraction's result.
-    pub p_merged: [f32; 3],
-    /// `v0`'s position.
-    pub p0: [f32; 3],
-    /// The triangles the contraction deleted, restored by the split in this
-    /// order: two for an interior edge (`fl`, `fr`), one on a border, none
-    /// for a non-edge (τ) pair.
-    pub faces: SmallVec<[[u32; 3]; 2]>,
-    /// The corners that go from `v1` back to `v0`, sorted (packed, inline
-    /// up to six, which is most splits: no allocation per split).
-    pub corners: Corners,
-    /// The contraction's quadric error: root mean squared distance from the
-    /// new vertex to the planes it carries (mesh units).
-    pub error: f32,
-}
 
 /// The whole sequence M_n … M_g: the base mesh plus the splits that refine it
 /// back to the (welded) input.
@@ -287,7 +244,7 @@ impl ProgressiveMesh {
         // one wedge per vertex (no seam, no attribute): the per-split
         // edits follow from it and are not stored (wedgelog.rs)
         let per_vertex =
-            wedges.and_then(|w| wedgelog::one_per_vertex(triangles, w, log, vertex_alive.len()));
+            wedges.and_then(|w| one_wedge_per_vertex(triangles, w, log, vertex_alive.len()));
         let explicit = wedges.is_some() && per_vertex.is_none();
         let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if explicit {
             (0..n)
@@ -649,4 +606,56 @@ impl SplitBuilder<'_> {
             }
         }
     }
+}
+
+/// The wedge of each simplifier vertex when every corner of the log agrees
+/// with one wedge per vertex: the final and dying triangles' corners
+/// (`wedges`, parallel to `triangles`) and every moved corner's edit (from
+/// `v0`'s wedge to `v1`'s). `None` when some vertex has two wedges at some
+/// step. A vertex without any corner gets 0 (no corner ever reads it).
+fn one_wedge_per_vertex(
+    triangles: &[[u32; 3]],
+    wedges: &[[u32; 3]],
+    log: &Log,
+    vertices: usize,
+) -> Option<Vec<u32>> {
+    const UNSET: u32 = u32::MAX;
+    if log.wedges.len() != log.corners.len() {
+        return None;
+    }
+    let mut of = vec![UNSET; vertices];
+    let mut agree = |v: u32, w: u32| {
+        let slot = &mut of[v as usize];
+        if *slot == UNSET {
+            *slot = w;
+        }
+        *slot == w && w != UNSET
+    };
+    for (t, w) in triangles.iter().zip(wedges) {
+        for k in 0..3 {
+            if !agree(t[k], w[k]) {
+                return None;
+            }
+        }
+    }
+    for c in &log.records {
+        for e in moved_wedges(log, c) {
+            if !agree(c.v0, e[0]) || !agree(c.v1, e[1]) {
+                return None;
+            }
+        }
+    }
+    for w in &mut of {
+        if *w == UNSET {
+            *w = 0;
+        }
+    }
+    Some(of)
+}
+
+/// The `[before, after]` wedges of `c`'s moved corners.
+fn moved_wedges<'a>(log: &'a Log, c: &Contraction) -> &'a [[u32; 2]] {
+    log.wedges
+        .get(c.moved.start as usize..c.moved.end as usize)
+        .unwrap_or(&[])
 }

@@ -6,14 +6,14 @@
 //! The second form is what a mesh without seams or attributes (a scan)
 //! produces: its explicit edits took ~120 bytes per split, about half the
 //! progressive mesh, where one `u32` per vertex says the same. It is chosen
-//! in `from_log` only after checking that every corner of the log, alive or
+//! in `from_log` only after checking (`one_wedge_per_vertex` in mod.rs) that every corner of the log, alive or
 //! dead, agrees with it, so both forms give the same wedges everywhere.
 
 use std::borrow::Cow;
 
 use smallvec::SmallVec;
 
-use super::{Contraction, Log, VertexSplit};
+use super::split::VertexSplit;
 
 /// The wedge payload of the log, parallel to the geometry: the caller's
 /// attribute ids per corner, so a replay restores attributes exactly by
@@ -85,56 +85,4 @@ impl WedgeLog {
         }
         cw.truncate(cw.len() - s.faces.len());
     }
-}
-
-/// The wedge of each simplifier vertex when every corner of the log agrees
-/// with one wedge per vertex: the final and dying triangles' corners
-/// (`wedges`, parallel to `triangles`) and every moved corner's edit (from
-/// `v0`'s wedge to `v1`'s). `None` when some vertex has two wedges at some
-/// step. A vertex without any corner gets 0 (no corner ever reads it).
-pub(super) fn one_per_vertex(
-    triangles: &[[u32; 3]],
-    wedges: &[[u32; 3]],
-    log: &Log,
-    vertices: usize,
-) -> Option<Vec<u32>> {
-    const UNSET: u32 = u32::MAX;
-    if log.wedges.len() != log.corners.len() {
-        return None;
-    }
-    let mut of = vec![UNSET; vertices];
-    let mut agree = |v: u32, w: u32| {
-        let slot = &mut of[v as usize];
-        if *slot == UNSET {
-            *slot = w;
-        }
-        *slot == w && w != UNSET
-    };
-    for (t, w) in triangles.iter().zip(wedges) {
-        for k in 0..3 {
-            if !agree(t[k], w[k]) {
-                return None;
-            }
-        }
-    }
-    for c in &log.records {
-        for e in moved_wedges(log, c) {
-            if !agree(c.v0, e[0]) || !agree(c.v1, e[1]) {
-                return None;
-            }
-        }
-    }
-    for w in &mut of {
-        if *w == UNSET {
-            *w = 0;
-        }
-    }
-    Some(of)
-}
-
-/// The `[before, after]` wedges of `c`'s moved corners.
-fn moved_wedges<'a>(log: &'a Log, c: &Contraction) -> &'a [[u32; 2]] {
-    log.wedges
-        .get(c.moved.start as usize..c.moved.end as usize)
-        .unwrap_or(&[])
 }

@@ -1,12 +1,53 @@
-//! The corners a vertex split moves, packed: one `u32` per corner
-//! (`triangle << 2 | slot`), inline up to six. A list of [`Corner`]s took
-//! 56 bytes in every split (a quarter of the progressive mesh of a scan);
-//! this takes 32. Triangles are below 2^30 (`Mesh::validate`, the stream
-//! header), so the packing is exact.
+//! One vertex split ([`VertexSplit`]) and the corners it moves,
+//! [`Corners`]: packed as one `u32` per corner (`triangle << 2 | slot`),
+//! inline up to six. A list of [`Corner`]s took 56 bytes in every split (a
+//! quarter of the progressive mesh of a scan); this takes 32. Triangles are
+//! below 2^30 (`Mesh::validate`, the stream header), so the packing is
+//! exact.
 
 use smallvec::SmallVec;
 
-use super::Corner;
+/// A triangle corner: `triangles[triangle][slot]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Corner {
+    /// The triangle.
+    pub triangle: u32,
+    /// Which of its three corners (0, 1 or 2).
+    pub slot: u8,
+}
+
+/// One vertex split: the exact inverse of one contraction.
+///
+/// Applying it to the mesh with `v0` vertices and `t` triangles:
+/// 1. set `v1`'s position to `p1` and append vertex `v0` at `p0`;
+/// 2. append `faces` as triangles `t, t + 1, …`;
+/// 3. set every corner in `corners` (currently `v1`) to `v0`.
+///
+/// Undoing it (a collapse) reverses the three steps, putting `v1` at
+/// `p_merged`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexSplit {
+    /// The vertex that stays (it exists before the split).
+    pub v1: u32,
+    /// The vertex the split restores: always the next vertex index.
+    pub v0: u32,
+    /// `v1`'s position after the split (before the contraction).
+    pub p1: [f32; 3],
+    /// `v1`'s position before the split: the contraction's result.
+    pub p_merged: [f32; 3],
+    /// `v0`'s position.
+    pub p0: [f32; 3],
+    /// The triangles the contraction deleted, restored by the split in this
+    /// order: two for an interior edge (`fl`, `fr`), one on a border, none
+    /// for a non-edge (τ) pair.
+    pub faces: SmallVec<[[u32; 3]; 2]>,
+    /// The corners that go from `v1` back to `v0`, sorted (packed, inline
+    /// up to six, which is most splits: no allocation per split).
+    pub corners: Corners,
+    /// The contraction's quadric error: root mean squared distance from the
+    /// new vertex to the planes it carries (mesh units).
+    pub error: f32,
+}
 
 /// The corners a split moves from `v1` to `v0`, in [`Corner`] order.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
