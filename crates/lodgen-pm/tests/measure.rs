@@ -803,3 +803,49 @@ fn sample_floor_is_capped_per_triangle_for_tiny_meshes() {
         96
     );
 }
+
+/// Distance from `p` to the nearest triangle of `to`, by trying them all.
+fn distance_to(p: [f64; 3], to: &Mesh) -> f64 {
+    to.triangles
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = t.map(|v| to.positions[v as usize].map(f64::from));
+            distance_squared(p, closest_point_on_triangle(p, a, b, c))
+        })
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
+}
+
+/// `Distance::at` names where the maximum was found: a point of the sampled mesh whose
+/// distance to the other mesh is the reported maximum (sampled and bounded methods, both
+/// directions, maxima at an area sample, at a vertex and over a hole).
+#[test]
+fn maximum_place_is_on_the_sampled_mesh_at_the_maximum_distance() {
+    let mut holed = grid(20, |_, _| 0.0);
+    let centre = |t: &[u32; 3]| {
+        let p = t.map(|v| holed.positions[v as usize]);
+        [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
+    };
+    holed
+        .triangles
+        .retain(|t| centre(t).iter().map(|c| (c - 0.5).powi(2)).sum::<f32>() > 0.04);
+    let cases = [
+        fine_and_coarse(),
+        (cube(0.5), bumpy(8).translated([-0.5, -0.5, 0.45])),
+        (holed, grid(1, |_, _| 0.01)),
+    ];
+    for opts in [MeasureOptions::DEFAULT, MeasureOptions::BOUNDED] {
+        for (i, (a, b)) in cases.iter().enumerate() {
+            let r = measure(a.r(), b.r(), &opts).unwrap();
+            for (what, d, from, to) in [("A→B", r.a_to_b, a, b), ("B→A", r.b_to_a, b, a)] {
+                let what = format!("{:?} case {i} {what}", opts.method);
+                let p = d.at.unwrap_or_else(|| panic!("{what}: no place for {d:?}"));
+                assert!(
+                    distance_to(p, from) <= 1e-9 * r.diagonal,
+                    "{what}: {p:?} is not on the sampled mesh"
+                );
+                assert_close(distance_to(p, to), d.max, 1e-9 * r.diagonal, &what);
+            }
+        }
+    }
+}

@@ -257,6 +257,19 @@ fn inspect_and_measure_report_on_outputs() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     // the finest level (50%) is what the scene draws
     assert!(v["hausdorff_percent"].as_f64().unwrap() > 0.0);
+    // where each direction's maximum lies: a point in the torus's box (radii 1 and 0.35)
+    for dir in ["a_to_b", "b_to_a"] {
+        let at: Vec<f64> = v[dir]["at"]
+            .as_array()
+            .unwrap_or_else(|| panic!("no {dir}.at in {v}"))
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(at.len(), 3, "{v}");
+        assert!(at.iter().all(|x| x.abs() <= 1.4), "{dir}.at {at:?}");
+    }
+    let o = lodgen(&["measure", input.to_str().unwrap(), out.to_str().unwrap()]);
+    assert!(stdout(&o).contains("A -> B maximum at ("), "{}", stdout(&o));
 }
 
 /// The bunny and cow LOD sets, as a pipeline would make them; the bunny's

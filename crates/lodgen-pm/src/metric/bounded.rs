@@ -63,6 +63,8 @@ pub(crate) struct BoundedMax {
     pub bound2: f64,
     /// Exact closest-point queries made.
     pub queries: usize,
+    /// Where a squared distance above the floor was found (`None`: nothing above it).
+    pub at: Option<[f64; 3]>,
 }
 
 /// Triangles per unit of parallel work: fixed, so the result does not depend on the threads.
@@ -130,6 +132,7 @@ pub(crate) fn bounded_max(
             max2: f64::INFINITY,
             bound2: f64::INFINITY,
             queries: 0,
+            at: None,
         };
     }
     let partials: Vec<BoundedMax> = order
@@ -140,9 +143,13 @@ pub(crate) fn bounded_max(
         max2: floor2,
         bound2: 0.0,
         queries: 0,
+        at: None,
     };
     for p in partials {
-        out.max2 = out.max2.max(p.max2);
+        if p.max2 > out.max2 {
+            out.max2 = p.max2;
+            out.at = p.at;
+        }
         out.bound2 = out.bound2.max(p.bound2);
         out.queries += p.queries;
     }
@@ -165,6 +172,7 @@ fn bound_chunk(
         max2: floor2,
         bound2: 0.0,
         queries: 0,
+        at: None,
     };
     let mut hint: Option<u32> = None;
     let mut stack: Vec<Cell> = Vec::new();
@@ -232,7 +240,10 @@ fn exact(to: &TriangleBvh, q: [f64; 3], hint: &mut Option<u32>, out: &mut Bounde
         .expect("a non-empty hierarchy always has an answer");
     *hint = Some(slot);
     out.queries += 1;
-    out.max2 = out.max2.max(d2);
+    if d2 > out.max2 {
+        out.max2 = d2;
+        out.at = Some(q);
+    }
     Corner { p: q, d2, slot }
 }
 

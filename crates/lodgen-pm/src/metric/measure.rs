@@ -62,6 +62,9 @@ pub struct Distance {
     pub rms: f64,
     /// Points measured: area samples plus vertices.
     pub samples: usize,
+    /// The point of the sampled mesh where `max` was found (`None` when nothing was measured):
+    /// where to look for the worst spot of a level.
+    pub at: Option<[f64; 3]>,
 }
 
 impl Distance {
@@ -72,6 +75,7 @@ impl Distance {
         mean: 0.0,
         rms: 0.0,
         samples: 0,
+        at: None,
     };
 }
 
@@ -269,6 +273,8 @@ const CHUNK: usize = 4096;
 #[derive(Clone, Copy, Debug)]
 struct Partial {
     max2: f64,
+    /// Where `max2` was found.
+    at: Option<[f64; 3]>,
     sum: f64,
     sum2: f64,
     count: usize,
@@ -277,21 +283,29 @@ struct Partial {
 impl Partial {
     const ZERO: Partial = Partial {
         max2: 0.0,
+        at: None,
         sum: 0.0,
         sum2: 0.0,
         count: 0,
     };
 
     #[inline]
-    fn add(&mut self, d2: f64) {
-        self.max2 = self.max2.max(d2);
+    fn add(&mut self, d2: f64, p: [f64; 3]) {
+        if d2 > self.max2 || self.at.is_none() {
+            self.max2 = d2;
+            self.at = Some(p);
+        }
         self.sum += d2.sqrt();
         self.sum2 += d2;
         self.count += 1;
     }
 
+    /// Folds `o` in; on equal maxima the earlier chunk's place stays (chunks fold in order).
     fn merge(mut self, o: Partial) -> Partial {
-        self.max2 = self.max2.max(o.max2);
+        if o.max2 > self.max2 || (self.at.is_none() && o.max2 >= self.max2) {
+            self.max2 = o.max2;
+            self.at = o.at;
+        }
         self.sum += o.sum;
         self.sum2 += o.sum2;
         self.count += o.count;
@@ -316,11 +330,11 @@ fn measure_points(
             for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
                 let p = point(i, &mut cursor);
                 let Some((d2, slot, _)) = to.closest_slot(p, hint) else {
-                    acc.add(f64::INFINITY);
+                    acc.add(f64::INFINITY, p);
                     continue;
                 };
                 hint = Some(slot);
-                acc.add(d2);
+                acc.add(d2, p);
             }
             acc
         })
@@ -356,10 +370,12 @@ fn max_above(
             let range = c * CHUNK..((c + 1) * CHUNK).min(count);
             acc.count = range.len();
             for i in range {
-                let (d2, h) = to.farther_than(point(i, &mut cursor), acc.max2, hint);
+                let p = point(i, &mut cursor);
+                let (d2, h) = to.farther_than(p, acc.max2, hint);
                 hint = h;
                 if let Some(d2) = d2 {
                     acc.max2 = d2;
+                    acc.at = Some(p);
                 }
             }
             acc
@@ -555,6 +571,7 @@ fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Pla
             mean,
             rms,
             samples: stats.count + max.queries,
+            at: max.at.or(stats.at),
         };
     }
     let vertices = if plan.vertex_samples {
@@ -569,12 +586,18 @@ fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Pla
         Partial::ZERO
     };
     let (mean, rms) = stats_of(if area.count > 0 { &area } else { &vertices });
+    // max_above starts at the area maximum and records a place only above it
+    let at = match vertices.at {
+        Some(p) if vertices.max2 > area.max2 || area.at.is_none() => Some(p),
+        _ => area.at,
+    };
     Distance {
         max: area.max2.max(vertices.max2).sqrt(),
         max_bound: f64::INFINITY,
         mean,
         rms,
         samples: area.count + vertices.count,
+        at,
     }
 }
 

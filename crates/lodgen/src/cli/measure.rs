@@ -84,8 +84,8 @@ pub fn measure_report(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result
             serde_json::to_string_pretty(&json!({
                 "a": a.display().to_string(), "b": b.display().to_string(),
                 "diagonal": r.diagonal,
-                "a_to_b": {"hausdorff": r.a_to_b.max, "mean": r.a_to_b.mean, "rms": r.a_to_b.rms, "samples": r.a_to_b.samples},
-                "b_to_a": {"hausdorff": r.b_to_a.max, "mean": r.b_to_a.mean, "rms": r.b_to_a.rms, "samples": r.b_to_a.samples},
+                "a_to_b": {"hausdorff": r.a_to_b.max, "at": r.a_to_b.at, "mean": r.a_to_b.mean, "rms": r.a_to_b.rms, "samples": r.a_to_b.samples},
+                "b_to_a": {"hausdorff": r.b_to_a.max, "at": r.b_to_a.at, "mean": r.b_to_a.mean, "rms": r.b_to_a.rms, "samples": r.b_to_a.samples},
                 "hausdorff_percent": r.hausdorff_percent(), "rms_percent": r.rms_percent(), "mean_percent": r.mean_percent(),
             }))?
         )?;
@@ -125,6 +125,14 @@ pub fn measure_report(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result
             r.rms(),
             r.rms_percent()
         )?;
+        for (name, mesh, d) in [("A -> B", "A", r.a_to_b), ("B -> A", "B", r.b_to_a)] {
+            if let Some([x, y, z]) = d.at {
+                writeln!(
+                    out,
+                    "{name} maximum at ({x:.6}, {y:.6}, {z:.6}), a point of {mesh}"
+                )?;
+            }
+        }
     }
     Ok(out)
 }

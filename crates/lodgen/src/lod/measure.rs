@@ -77,6 +77,7 @@ impl<'a> Measurer<'a> {
             mean: f64::NAN,
             rms: f64::NAN,
             samples: 0,
+            at: None,
         };
         ErrorReport {
             a_to_b: d,
@@ -95,6 +96,7 @@ impl<'a> Measurer<'a> {
             mean: 0.0,
             rms: 0.0,
             samples: 0,
+            at: None,
         };
         ErrorReport {
             a_to_b: d,
