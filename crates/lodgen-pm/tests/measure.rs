@@ -471,6 +471,20 @@ fn fast_metric_matches_brute_force_reference() {
     }
 }
 
+/// A flat 20×20 grid with a round hole (radius 0.2) in the middle: under a flat square, the
+/// distance back to it peaks over the hole's middle, far from every vertex.
+fn holed_grid() -> Mesh {
+    let mut holed = grid(20, |_, _| 0.0);
+    let centre = |t: &[u32; 3]| {
+        let p = t.map(|v| holed.positions[v as usize]);
+        [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
+    };
+    holed
+        .triangles
+        .retain(|t| centre(t).iter().map(|c| (c - 0.5).powi(2)).sum::<f32>() > 0.04);
+    holed
+}
+
 /// The bounded maximum ([`MeasureOptions::BOUNDED`]) against the brute-force reference: the
 /// true maximum is at least the reference's (a maximum over points of the surface), so the
 /// certified bound must reach it, and the value found (attained at a point, so never above the
@@ -480,14 +494,7 @@ fn fast_metric_matches_brute_force_reference() {
 fn bounded_maximum_brackets_the_brute_force_maximum() {
     // a grid with a round hole under a flat square: B→A peaks over the hole's middle, far
     // from every vertex, and the few area samples (no floor) miss the peak by several %
-    let mut holed = grid(20, |_, _| 0.0);
-    let centre = |t: &[u32; 3]| {
-        let p = t.map(|v| holed.positions[v as usize]);
-        [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
-    };
-    holed
-        .triangles
-        .retain(|t| centre(t).iter().map(|c| (c - 0.5).powi(2)).sum::<f32>() > 0.04);
+    let holed = holed_grid();
     let cases = [
         (bumpy(24), grid(5, |x, y| 0.05 * x - 0.02 * y), 16, 64.0),
         (cube(0.5), bumpy(8).translated([-0.5, -0.5, 0.45]), 16, 64.0),
@@ -821,14 +828,7 @@ fn distance_to(p: [f64; 3], to: &Mesh) -> f64 {
 /// directions, maxima at an area sample, at a vertex and over a hole).
 #[test]
 fn maximum_place_is_on_the_sampled_mesh_at_the_maximum_distance() {
-    let mut holed = grid(20, |_, _| 0.0);
-    let centre = |t: &[u32; 3]| {
-        let p = t.map(|v| holed.positions[v as usize]);
-        [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
-    };
-    holed
-        .triangles
-        .retain(|t| centre(t).iter().map(|c| (c - 0.5).powi(2)).sum::<f32>() > 0.04);
+    let holed = holed_grid();
     let cases = [
         fine_and_coarse(),
         (cube(0.5), bumpy(8).translated([-0.5, -0.5, 0.45])),

@@ -33,7 +33,7 @@
 use rayon::prelude::*;
 
 use super::bvh::TriangleBvh;
-use super::triangle::widen;
+use super::triangle::{dot, sub, widen};
 use super::MeshRef;
 
 /// When a cell counts as settled: its upper bound is at most `L (1 + relative) + absolute`
@@ -417,16 +417,6 @@ fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
         u[2] * v[0] - u[0] * v[2],
         u[0] * v[1] - u[1] * v[0],
     ]
-}
-
-#[inline(always)]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline(always)]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[cfg(test)]
