@@ -90,17 +90,9 @@ impl<'a> Measurer<'a> {
     /// needed (a scene of many small meshes kept whole spent most of its
     /// time measuring them against themselves).
     fn exact_zero(&self) -> ErrorReport {
-        let d = Distance {
-            max: 0.0,
-            max_bound: 0.0,
-            mean: 0.0,
-            rms: 0.0,
-            samples: 0,
-            at: None,
-        };
         ErrorReport {
-            a_to_b: d,
-            b_to_a: d,
+            a_to_b: Distance::NONE,
+            b_to_a: Distance::NONE,
             diagonal: self.diagonal,
         }
     }
