@@ -388,6 +388,7 @@ impl BuildArgs {
             attribute_weights: parse_attribute_weights(&self.attribute_weights)?,
             min_triangles: self.min_triangles,
             meter: None,
+            keep_progressive: true,
         })
     }
 

@@ -62,6 +62,9 @@ pub fn build_file_metered(
 ) -> Result<BuiltFile> {
     let mut opts = args.build_options()?;
     opts.meter = meter;
+    // the progressive mesh is written with --progressive only; else it is
+    // freed before the error measurement (peak memory)
+    opts.keep_progressive = args.progressive;
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }

@@ -5,9 +5,12 @@
 use std::time::Instant;
 
 use lodgen_pm::metric::{ErrorReport, MeasureOptions};
-use lodgen_pm::{levels, simplify_adaptive, MeshError, Method, Simplified, SimplifyOptions};
+use lodgen_pm::{
+    levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
+    SimplifyOptions,
+};
 
-use crate::scene::{LodLevel, LodMesh, Scene, SourceMesh, Warning};
+use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh, Warning};
 
 use super::error::BuildError;
 use super::extract::extract;
@@ -22,7 +25,9 @@ use super::wedges::simplify_wedged;
 #[derive(Clone, Debug)]
 pub struct MeshBuild {
     pub lod: LodMesh,
-    /// The simplification (progressive mesh, stats, stop reason).
+    /// The simplification (progressive mesh, stats, stop reason); its
+    /// progressive mesh and maps are empty unless
+    /// [`BuildOptions::keep_progressive`].
     pub simplified: Simplified,
     /// Split count of each level, finest first.
     pub level_splits: Vec<usize>,
@@ -149,11 +154,11 @@ pub fn build_one(
     };
     let sopts = simplify_options(opts, flat.indices.len() / 3)?;
     let t_build = Instant::now();
-    let simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
+    let mut simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
     let simplify_time = t_build.elapsed();
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
-    let measurer = Measurer::new(pm, &full, opts.measured, index, &mesh.name)?;
+    let measurer = Measurer::new(pm, &full, opts.measured, index, &mesh.name);
     let mut measuring = |level: usize, of: usize| {
         progress(Progress::Measuring {
             mesh: index,
@@ -162,10 +167,17 @@ pub fn build_one(
         })
     };
     let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
-    let (lod_levels, errors) = build_levels(
-        mesh,
-        &flat,
-        &simplified,
+    let extracted = extract_levels(mesh, &flat, &simplified, &splits, opts.measured);
+    if !opts.keep_progressive {
+        // the levels are out: the sequence is not needed while the
+        // original's hierarchy is built and the levels measured
+        simplified.pm = ProgressiveMesh::default();
+        simplified.vertex_map = Vec::new();
+        simplified.triangle_map = Vec::new();
+    }
+    let (lod_levels, errors) = measure_levels(
+        extracted,
+        &full,
         &splits,
         &opts.measure,
         &measurer,
@@ -245,36 +257,66 @@ fn simplify(
     }
 }
 
-/// Every level at `splits`: measured, attributes fitted below the input
-/// (module docs), extracted into primitives; then the screen coverages
-/// from the measured errors.
-fn build_levels(
+/// A level cut from the sequence: its primitives, and its mesh while it
+/// waits to be measured.
+struct Extracted {
+    primitives: Vec<Primitive>,
+    /// `None` when the level is not measured: no measurement, or the
+    /// level is the original (its error is 0).
+    mesh: Option<Mesh>,
+}
+
+/// Every level at `splits`: attributes fitted below the input (module
+/// docs), extracted into primitives; its mesh kept when `measured` and the
+/// level is below the input.
+fn extract_levels(
     mesh: &SourceMesh,
     flat: &Flat,
     simplified: &Simplified,
     splits: &[usize],
-    mopts: &MeasureOptions,
-    measurer: &Measurer<'_>,
-    measuring: &mut dyn FnMut(usize, usize),
-) -> Result<(Vec<LodLevel>, Vec<ErrorReport>), BuildError> {
+    measured: bool,
+) -> Vec<Extracted> {
     let pm = &simplified.pm;
-    let diagonal = measurer.diagonal();
-    let mut errors = Vec::with_capacity(splits.len());
-    let mut lod_levels = Vec::with_capacity(splits.len());
     let mut cursor = pm.cursor();
     let fit_source = FitSource::new(mesh, flat, simplified);
-    for (li, &k) in splits.iter().enumerate() {
-        measuring(li, splits.len());
+    let mut out = Vec::with_capacity(splits.len());
+    for &k in splits {
         cursor.seek(k);
         let m = cursor.mesh();
-        let report = measurer.measure(m, k, mopts)?;
         // a level below the input gets fitted values (module docs)
         let fitted = match (&fit_source, cursor.wedges()) {
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
             _ => None,
         };
-        lod_levels.push(LodLevel {
+        out.push(Extracted {
             primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
+            mesh: (measured && k < pm.len()).then(|| m.clone()),
+        });
+    }
+    out
+}
+
+/// Every extracted level measured (its mesh freed once it is), then the
+/// screen coverages from the measured errors. `full` stands for a level
+/// without a mesh (the original, or not measured: its error does not read
+/// it).
+fn measure_levels(
+    extracted: Vec<Extracted>,
+    full: &Mesh,
+    splits: &[usize],
+    mopts: &MeasureOptions,
+    measurer: &Measurer<'_>,
+    measuring: &mut dyn FnMut(usize, usize),
+) -> Result<(Vec<LodLevel>, Vec<ErrorReport>), BuildError> {
+    let diagonal = measurer.diagonal();
+    let mut errors = Vec::with_capacity(splits.len());
+    let mut lod_levels = Vec::with_capacity(splits.len());
+    for (li, (level, &k)) in extracted.into_iter().zip(splits).enumerate() {
+        measuring(li, splits.len());
+        let report = measurer.measure(level.mesh.as_ref().unwrap_or(full), k, mopts)?;
+        drop(level.mesh);
+        lod_levels.push(LodLevel {
+            primitives: level.primitives,
             hausdorff: report.hausdorff() / diagonal.max(f64::MIN_POSITIVE),
             rms: report.rms() / diagonal.max(f64::MIN_POSITIVE),
             screen_coverage: 0.0,

@@ -1,8 +1,12 @@
 //! A level's error: measured against the original (its hierarchy built
-//! once per mesh), or without measurement the quadric's estimate; the time
-//! spent measuring is counted.
+//! once per mesh, at the first measurement), or without measurement the
+//! quadric's estimate; the time spent measuring is counted.
+//!
+//! The measurer does not hold the progressive mesh: the builder frees it
+//! once the levels are extracted, before the original's hierarchy is built
+//! (peak memory: at 4.4M triangles the two together were the run's peak).
 
-use std::cell::Cell;
+use std::cell::{Cell, OnceCell};
 use std::time::{Duration, Instant};
 
 use lodgen_pm::metric::{Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
@@ -12,11 +16,19 @@ use super::error::BuildError;
 
 /// Measures the levels of one mesh's progressive mesh.
 pub(super) struct Measurer<'a> {
-    pm: &'a ProgressiveMesh,
+    /// The fully refined mesh, the original every level is measured against.
+    full: &'a Mesh,
+    /// Splits of the whole sequence: a level with as many is the original.
+    splits: usize,
+    /// Without measurement: for each split count k, the largest recorded
+    /// contraction error of splits k.. (the quadric's estimate); empty when
+    /// measuring.
+    estimates: Vec<f32>,
+    measured: bool,
     diagonal: f64,
-    /// The original's hierarchy and sample order, built once for every
-    /// level; `None` without measurement.
-    reference: Option<Reference<'a>>,
+    /// The original's hierarchy and sample order, built at the first
+    /// measurement and used for every level.
+    reference: OnceCell<Reference<'a>>,
     time: Cell<Duration>,
     index: usize,
     name: &'a str,
@@ -24,32 +36,45 @@ pub(super) struct Measurer<'a> {
 
 impl<'a> Measurer<'a> {
     /// `full` is `pm` fully refined; `index` and `name` name the mesh in
-    /// errors.
+    /// errors. `pm` is read here only.
     pub(super) fn new(
-        pm: &'a ProgressiveMesh,
+        pm: &ProgressiveMesh,
         full: &'a Mesh,
         measured: bool,
         index: usize,
         name: &'a str,
-    ) -> Result<Measurer<'a>, BuildError> {
-        let diagonal = full.diagonal();
-        let t_measure = Instant::now();
-        let reference = if measured {
-            Some(
-                Reference::new(MeshRef::new(&full.positions, &full.triangles))
-                    .map_err(|e| measure_err(index, name, MeasureError::A(e)))?,
-            )
-        } else {
-            None
-        };
-        Ok(Measurer {
-            pm,
-            diagonal,
-            reference,
-            time: Cell::new(t_measure.elapsed()),
+    ) -> Measurer<'a> {
+        let mut estimates = Vec::new();
+        if !measured {
+            estimates = vec![0.0f32; pm.len() + 1];
+            for (k, s) in pm.splits.iter().enumerate().rev() {
+                estimates[k] = estimates[k + 1].max(s.error);
+            }
+        }
+        Measurer {
+            full,
+            splits: pm.len(),
+            estimates,
+            measured,
+            diagonal: full.diagonal(),
+            reference: OnceCell::new(),
+            time: Cell::new(Duration::ZERO),
             index,
             name,
-        })
+        }
+    }
+
+    /// The original's hierarchy, built at the first call.
+    fn reference(&self) -> Result<&Reference<'a>, BuildError> {
+        if let Some(r) = self.reference.get() {
+            return Ok(r);
+        }
+        let t = Instant::now();
+        let full = self.full;
+        let r = Reference::new(MeshRef::new(&full.positions, &full.triangles))
+            .map_err(|e| measure_err(self.index, self.name, MeasureError::A(e)))?;
+        self.time.set(self.time.get() + t.elapsed());
+        Ok(self.reference.get_or_init(|| r))
     }
 
     /// The original's bounding-box diagonal.
@@ -66,11 +91,7 @@ impl<'a> Measurer<'a> {
     /// largest recorded contraction error still in it (the quadric's
     /// estimate): the mesh after k splits still carries contractions k..
     fn estimate(&self, k: usize) -> ErrorReport {
-        let pm = self.pm;
-        let e = pm.splits[k.min(pm.splits.len())..]
-            .iter()
-            .map(|s| f64::from(s.error))
-            .fold(0.0, f64::max);
+        let e = f64::from(self.estimates[k.min(self.splits)]);
         let d = Distance {
             max: e,
             max_bound: f64::INFINITY,
@@ -104,14 +125,15 @@ impl<'a> Measurer<'a> {
         k: usize,
         mopts: &MeasureOptions,
     ) -> Result<ErrorReport, BuildError> {
-        let Some(reference) = &self.reference else {
+        if !self.measured {
             return Ok(self.estimate(k));
-        };
-        if k >= self.pm.splits.len() {
+        }
+        if k >= self.splits {
             // every split applied: the level is the original itself (a
             // mesh below --min-triangles, a level at 100 %), its error 0
             return Ok(self.exact_zero());
         }
+        let reference = self.reference()?;
         let t = Instant::now();
         let r = reference
             .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
@@ -120,13 +142,15 @@ impl<'a> Measurer<'a> {
         r
     }
 
-    /// The error of the mesh after `k` splits.
+    /// The error of the mesh after `k` splits of `pm` (the sequence this
+    /// measurer was made for).
     pub(super) fn measure_at(
         &self,
+        pm: &ProgressiveMesh,
         k: usize,
         mopts: &MeasureOptions,
     ) -> Result<ErrorReport, BuildError> {
-        self.measure(&self.pm.mesh_at_splits(k), k, mopts)
+        self.measure(&pm.mesh_at_splits(k), k, mopts)
     }
 }
 

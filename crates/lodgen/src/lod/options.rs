@@ -40,6 +40,13 @@ pub struct BuildOptions {
     /// target reached, for a progress display on another thread (`None`:
     /// not reported).
     pub meter: Option<std::sync::Arc<lodgen_pm::Meter>>,
+    /// Keep each mesh's progressive mesh and its maps in
+    /// [`crate::lod::MeshBuild::simplified`] (default). When false they are
+    /// freed as soon as the levels are extracted, before the error
+    /// measurement builds its hierarchy (peak memory of a scan: the two
+    /// were the run's peak), and `simplified.pm`, `vertex_map` and
+    /// `triangle_map` are empty; the CLI keeps them for `--progressive` only.
+    pub keep_progressive: bool,
 }
 
 /// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
@@ -101,6 +108,7 @@ impl Default for BuildOptions {
             attribute_weights: AttributeWeights::DEFAULT,
             min_triangles: DEFAULT_MIN_TRIANGLES,
             meter: None,
+            keep_progressive: true,
         }
     }
 }

@@ -80,7 +80,7 @@ fn splits_by_error(
         let (mut lo, mut hi) = (0usize, pm.len());
         while lo < hi {
             let mid = lo + (hi - lo) / 2;
-            if measurer.measure_at(mid, &coarse)?.hausdorff() <= bound {
+            if measurer.measure_at(pm, mid, &coarse)?.hausdorff() <= bound {
                 hi = mid;
             } else {
                 lo = mid + 1;
