@@ -26,6 +26,7 @@ mod gltf_data;
 mod gltf_in;
 mod meshopt_in;
 mod obj;
+mod obj_parse;
 mod ply;
 mod smf;
 
@@ -79,10 +80,24 @@ pub fn read_scene(path: &Path) -> Result<Scene, ReadError> {
     read_scene_with(path, &ReadOptions::default())
 }
 
-/// [`read_scene`] with options.
+/// [`read_scene`] with options. An OBJ file is read and parsed a batch of
+/// lines at a time, never held whole; other formats are read whole first.
 pub fn read_scene_with(path: &Path, opts: &ReadOptions) -> Result<Scene, ReadError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| ReadError::new(path, Location::File, ErrorKind::Io).with_source(e))?;
+    use std::io::Read;
+    /// Enough of the file to tell its format.
+    const HEAD_BYTES: u64 = 64 << 10;
+    let io_err = |e| ReadError::new(path, Location::File, ErrorKind::Io).with_source(e);
+    let mut file = std::fs::File::open(path).map_err(io_err)?;
+    let mut bytes = Vec::new();
+    (&mut file)
+        .take(HEAD_BYTES)
+        .read_to_end(&mut bytes)
+        .map_err(io_err)?;
+    let format = detect_format(path, &bytes);
+    if format == Some(Format::Obj) {
+        return obj::read_obj_file(bytes, file, path);
+    }
+    file.read_to_end(&mut bytes).map_err(io_err)?;
     match detect_format(path, &bytes) {
         Some(Format::Obj) => read_obj(&bytes, path),
         Some(Format::Ply) => read_ply(&bytes, path),

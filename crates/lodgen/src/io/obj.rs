@@ -29,21 +29,21 @@
 //! lines are ignored.
 
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
 
-use super::common::{check_not_empty, file_stem, lines, parse_coords, parse_f32};
+use super::common::{check_not_empty, file_stem, lines};
 use super::error::{ErrorKind, Location, ReadError};
+use super::obj_parse::{parse_batch, Chunk, Counts, Event, CHUNK_BYTES, NONE};
 use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
 
-const NONE: u32 = u32::MAX;
+/// How much of a file is read and parsed at once (whole lines; a longer
+/// line grows it).
+const BATCH_BYTES: usize = 32 << 20;
 
 /// Reads an OBJ file; `mtllib` files are read from the directory of `path`.
 pub fn read_obj(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
-    let dir = path.parent().map(Path::to_path_buf);
-    read_obj_with_materials(src, path, |name| {
-        let dir = dir.as_deref()?;
-        std::fs::read(dir.join(name)).ok()
-    })
+    read_obj_with_materials(src, path, mtl_beside(path))
 }
 
 /// Reads an OBJ file, asking `load_mtl` for the bytes of each `mtllib`
@@ -51,64 +51,75 @@ pub fn read_obj(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
 pub fn read_obj_with_materials(
     src: &[u8],
     path: &Path,
-    mut load_mtl: impl FnMut(&str) -> Option<Vec<u8>>,
+    load_mtl: impl FnMut(&str) -> Option<Vec<u8>>,
 ) -> Result<Scene, ReadError> {
-    let text = String::from_utf8_lossy(src);
-    let mut b = Builder::new(path);
-    for (line_no, line) in lines(&text) {
-        let mut tokens = line.split_ascii_whitespace();
-        let Some(keyword) = tokens.next() else {
-            continue;
+    let mut b = Builder::new(path, load_mtl);
+    let (chunks, _) = parse_batch(src, Counts::default(), CHUNK_BYTES, path);
+    b.add_chunks(chunks)?;
+    b.finish()
+}
+
+/// Reads an OBJ file from `file` whose first bytes, `head`, were read
+/// already, a batch of lines at a time (the file is never held whole).
+pub(super) fn read_obj_file(
+    head: Vec<u8>,
+    file: impl Read,
+    path: &Path,
+) -> Result<Scene, ReadError> {
+    read_obj_batches(head, file, path, BATCH_BYTES, CHUNK_BYTES)
+}
+
+fn read_obj_batches(
+    mut buf: Vec<u8>,
+    mut file: impl Read,
+    path: &Path,
+    batch_bytes: usize,
+    chunk_bytes: usize,
+) -> Result<Scene, ReadError> {
+    let io_err = |e| ReadError::new(path, Location::File, ErrorKind::Io).with_source(e);
+    let mut b = Builder::new(path, mtl_beside(path));
+    let mut counts = Counts::default();
+    let mut capacity = batch_bytes.max(buf.len());
+    loop {
+        // fill the buffer, then parse up to its last line end
+        // (`read_to_end` fills spare capacity without zeroing it first)
+        let want = capacity - buf.len();
+        buf.reserve(want);
+        let n = (&mut file)
+            .take(want as u64)
+            .read_to_end(&mut buf)
+            .map_err(io_err)?;
+        let end_of_file = n < want;
+        let cut = if end_of_file {
+            buf.len()
+        } else {
+            match memchr::memrchr(b'\n', &buf) {
+                Some(i) => i + 1,
+                None => {
+                    capacity *= 2; // one line longer than the buffer
+                    continue;
+                }
+            }
         };
-        match keyword {
-            "v" => {
-                let p: [f32; 3] = parse_coords(&mut tokens, path, line_no, "vertex coordinate")?;
-                b.positions.push(p);
-                b.head.push(NONE);
-            }
-            "vt" => {
-                let u = parse_coords::<1>(&mut tokens, path, line_no, "texture coordinate")?[0];
-                let v = match tokens.next() {
-                    Some(t) if !t.starts_with('#') => {
-                        parse_f32(t, path, line_no, "texture coordinate")?
-                    }
-                    _ => 0.0,
-                };
-                b.texcoords.push([u, 1.0 - v]);
-            }
-            "vn" => {
-                let n: [f32; 3] = parse_coords(&mut tokens, path, line_no, "normal")?;
-                b.normals.push(n);
-            }
-            "f" => b.face(tokens, line_no)?,
-            "o" => {
-                b.pending_name = Some(rest_of_line(line, keyword));
-                b.current_mesh = None;
-                b.current_prim = None;
-            }
-            "usemtl" => {
-                let name = rest_of_line(line, keyword);
-                let next = b.materials.len();
-                let index = *b.material_ids.entry(name.clone()).or_insert(next);
-                if index == next {
-                    b.materials.push(name);
-                }
-                b.current_material = Some(index);
-                b.current_prim = None;
-            }
-            "mtllib" => {
-                for file in tokens.take_while(|t| !t.starts_with('#')) {
-                    if let Some(bytes) = load_mtl(file) {
-                        parse_mtl(&String::from_utf8_lossy(&bytes), &mut b.mtl_colors);
-                    }
-                }
-            }
-            _ => {}
+        let (chunks, after) = parse_batch(&buf[..cut], counts, chunk_bytes, path);
+        counts = after;
+        b.add_chunks(chunks)?;
+        if end_of_file {
+            break;
         }
+        buf.drain(..cut);
     }
-    let scene = b.finish();
-    check_not_empty(&scene, path)?;
-    Ok(scene)
+    drop(buf);
+    b.finish()
+}
+
+/// `mtllib` files beside the OBJ.
+fn mtl_beside(path: &Path) -> impl FnMut(&str) -> Option<Vec<u8>> {
+    let dir = path.parent().map(Path::to_path_buf);
+    move |name| {
+        let dir = dir.as_deref()?;
+        std::fs::read(dir.join(name)).ok()
+    }
 }
 
 /// The text after the keyword, trimmed (names may contain spaces).
@@ -179,8 +190,11 @@ struct Wedge {
 
 struct PrimBuilder {
     material: Option<usize>,
-    /// Per local vertex: indices into the global `v`, `vt`, `vn` pools.
-    verts: Vec<[u32; 3]>,
+    /// Per local vertex: index into the global `v` pool, and into `vt` /
+    /// `vn` (empty while no corner of the primitive had one).
+    verts: Vec<u32>,
+    verts_vt: Vec<u32>,
+    verts_vn: Vec<u32>,
     indices: Vec<u32>,
 }
 
@@ -189,13 +203,19 @@ struct MeshBuilder {
     prims: Vec<usize>,
 }
 
-struct Builder<'a> {
+/// Puts the parsed chunks' corners into primitives, in file order.
+struct Builder<'a, L> {
     path: &'a Path,
+    load_mtl: L,
     positions: Vec<[f32; 3]>,
     texcoords: Vec<[f32; 2]>,
     normals: Vec<[f32; 3]>,
-    /// Per `v`: first wedge of its chain, or `NONE`.
+    /// Per `v`: first wedge of its chain, or `NONE`; while `simple`, the
+    /// vertex of the one primitive instead.
     head: Vec<u32>,
+    /// One primitive so far and no corner with `vt` / `vn`: a corner is its
+    /// `v` alone and `head` maps it to its vertex without wedges.
+    simple: bool,
     wedges: Vec<Wedge>,
     prims: Vec<PrimBuilder>,
     meshes: Vec<MeshBuilder>,
@@ -206,18 +226,18 @@ struct Builder<'a> {
     current_material: Option<usize>,
     current_mesh: Option<usize>,
     current_prim: Option<usize>,
-    /// Scratch: the local vertices of the face being read.
-    face: Vec<u32>,
 }
 
-impl<'a> Builder<'a> {
-    fn new(path: &'a Path) -> Self {
+impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
+    fn new(path: &'a Path, load_mtl: L) -> Self {
         Builder {
             path,
+            load_mtl,
             positions: Vec::new(),
             texcoords: Vec::new(),
             normals: Vec::new(),
             head: Vec::new(),
+            simple: true,
             wedges: Vec::new(),
             prims: Vec::new(),
             meshes: Vec::new(),
@@ -228,7 +248,106 @@ impl<'a> Builder<'a> {
             current_material: None,
             current_mesh: None,
             current_prim: None,
-            face: Vec::new(),
+        }
+    }
+
+    /// Adds the chunks of a batch in order; the first chunk's error is the
+    /// file's error.
+    fn add_chunks(&mut self, mut chunks: Vec<Chunk>) -> Result<(), ReadError> {
+        if let Some(e) = chunks.iter_mut().find_map(|c| c.error.take()) {
+            return Err(e);
+        }
+        for chunk in chunks {
+            self.add_chunk(chunk);
+        }
+        Ok(())
+    }
+
+    fn add_chunk(&mut self, mut c: Chunk) {
+        self.positions.append(&mut c.positions);
+        self.head.resize(self.positions.len(), NONE);
+        self.texcoords.append(&mut c.texcoords);
+        self.normals.append(&mut c.normals);
+        let mut at = 0;
+        for (corner, event) in std::mem::take(&mut c.events) {
+            self.corners(&c, at..corner);
+            at = corner;
+            self.event(event);
+        }
+        self.corners(&c, at..c.v.len());
+    }
+
+    fn event(&mut self, event: Event) {
+        match event {
+            Event::Object(name) => {
+                self.pending_name = Some(name);
+                self.current_mesh = None;
+                self.current_prim = None;
+            }
+            Event::Material(name) => {
+                let next = self.materials.len();
+                let index = *self.material_ids.entry(name.clone()).or_insert(next);
+                if index == next {
+                    self.materials.push(name);
+                }
+                self.current_material = Some(index);
+                self.current_prim = None;
+            }
+            Event::Library(files) => {
+                for file in files {
+                    if let Some(bytes) = (self.load_mtl)(&file) {
+                        parse_mtl(&String::from_utf8_lossy(&bytes), &mut self.mtl_colors);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The corners `range` of chunk `c` (whole triangles) into the current
+    /// primitive.
+    fn corners(&mut self, c: &Chunk, range: std::ops::Range<usize>) {
+        if range.is_empty() {
+            return;
+        }
+        let prim = self.prim();
+        if self.simple && c.vt.is_empty() && c.vn.is_empty() {
+            let p = &mut self.prims[prim];
+            p.indices.reserve(range.len());
+            for &v in &c.v[range] {
+                let local = &mut self.head[v as usize];
+                if *local == NONE {
+                    *local = p.verts.len() as u32;
+                    p.verts.push(v);
+                }
+                p.indices.push(*local);
+            }
+            return;
+        }
+        for i in range {
+            let vt = c.vt.get(i).copied().unwrap_or(NONE);
+            let vn = c.vn.get(i).copied().unwrap_or(NONE);
+            let local = self.corner(prim, c.v[i], vt, vn);
+            self.prims[prim].indices.push(local);
+        }
+    }
+
+    /// Leaves the simple form: a wedge for every vertex of primitive 0.
+    fn leave_simple(&mut self) {
+        if !self.simple {
+            return;
+        }
+        self.simple = false;
+        for h in &mut self.head {
+            if *h != NONE {
+                self.wedges.push(Wedge {
+                    prim: 0,
+                    vt: NONE,
+                    vn: NONE,
+                    local: *h,
+                    next: NONE,
+                });
+                *h = (self.wedges.len() - 1) as u32;
+            }
         }
     }
 
@@ -259,91 +378,41 @@ impl<'a> Builder<'a> {
             .iter()
             .copied()
             .find(|&p| self.prims[p].material == material);
-        let p = existing.unwrap_or_else(|| {
-            self.prims.push(PrimBuilder {
-                material,
-                verts: Vec::new(),
-                indices: Vec::new(),
-            });
-            self.meshes[mesh].prims.push(self.prims.len() - 1);
-            self.prims.len() - 1
-        });
+        let p = match existing {
+            Some(p) => p,
+            None => {
+                if !self.prims.is_empty() {
+                    self.leave_simple();
+                }
+                self.prims.push(PrimBuilder {
+                    material,
+                    verts: Vec::new(),
+                    verts_vt: Vec::new(),
+                    verts_vn: Vec::new(),
+                    indices: Vec::new(),
+                });
+                self.meshes[mesh].prims.push(self.prims.len() - 1);
+                self.prims.len() - 1
+            }
+        };
         self.current_prim = Some(p);
         p
     }
 
-    /// Resolves one OBJ index (1-based or negative) against `count` items.
-    fn resolve(
-        &self,
-        token: &str,
-        count: usize,
-        target: &'static str,
-        line: usize,
-    ) -> Result<u32, ReadError> {
-        let err = |kind| ReadError::new(self.path, Location::Line(line), kind);
-        let index: i64 = token.parse().map_err(|_| {
-            err(ErrorKind::Syntax {
-                expected: format!("a {target} index"),
-                found: token.to_owned(),
-            })
-        })?;
-        let resolved = match index {
-            0 => return Err(err(ErrorKind::ObjIndexZero { target })),
-            i if i > 0 => i - 1,
-            i => count as i64 + i,
-        };
-        if resolved < 0 || resolved >= count as i64 {
-            return Err(err(ErrorKind::IndexOutOfRange {
-                what: "face",
-                target,
-                index,
-                count,
-            }));
-        }
-        Ok(resolved as u32)
-    }
-
-    fn face<'t>(
-        &mut self,
-        tokens: impl Iterator<Item = &'t str>,
-        line: usize,
-    ) -> Result<(), ReadError> {
-        let prim = self.prim();
-        let mut face = std::mem::take(&mut self.face);
-        face.clear();
-        for corner in tokens.take_while(|t| !t.starts_with('#')) {
-            let mut parts = corner.split('/');
-            let v = parts.next().unwrap_or("");
-            let vt = parts.next().filter(|s| !s.is_empty());
-            let vn = parts.next().filter(|s| !s.is_empty());
-            let v = self.resolve(v, self.positions.len(), "vertex", line)?;
-            let vt = match vt {
-                Some(t) => self.resolve(t, self.texcoords.len(), "texture coordinate", line)?,
-                None => NONE,
-            };
-            let vn = match vn {
-                Some(t) => self.resolve(t, self.normals.len(), "normal", line)?,
-                None => NONE,
-            };
-            face.push(self.corner(prim, v, vt, vn));
-        }
-        if face.len() < 3 {
-            return Err(ReadError::new(
-                self.path,
-                Location::Line(line),
-                ErrorKind::Invalid(format!("face has {} corners, needs at least 3", face.len())),
-            ));
-        }
-        let indices = &mut self.prims[prim].indices;
-        for i in 1..face.len() - 1 {
-            indices.extend_from_slice(&[face[0], face[i], face[i + 1]]);
-        }
-        self.face = face;
-        Ok(())
-    }
-
     /// The primitive-local vertex of corner `(v, vt, vn)`, created on first use.
     fn corner(&mut self, prim: usize, v: u32, vt: u32, vn: u32) -> u32 {
+        if vt != NONE || vn != NONE {
+            self.leave_simple();
+        }
+        if self.simple {
+            let local = &mut self.head[v as usize];
+            let p = &mut self.prims[prim];
+            if *local == NONE {
+                *local = p.verts.len() as u32;
+                p.verts.push(v);
+            }
+            return *local;
+        }
         let prim32 = prim as u32;
         let mut w = self.head[v as usize];
         while w != NONE {
@@ -353,9 +422,15 @@ impl<'a> Builder<'a> {
             }
             w = wedge.next;
         }
-        let verts = &mut self.prims[prim].verts;
-        let local = verts.len() as u32;
-        verts.push([v, vt, vn]);
+        let p = &mut self.prims[prim];
+        let local = p.verts.len() as u32;
+        p.verts.push(v);
+        for (list, value) in [(&mut p.verts_vt, vt), (&mut p.verts_vn, vn)] {
+            if value != NONE || !list.is_empty() {
+                list.resize(local as usize, NONE);
+                list.push(value);
+            }
+        }
         self.wedges.push(Wedge {
             prim: prim32,
             vt,
@@ -367,7 +442,10 @@ impl<'a> Builder<'a> {
         local
     }
 
-    fn finish(self) -> Scene {
+    fn finish(mut self) -> Result<Scene, ReadError> {
+        // what the primitives no longer need goes first
+        self.head = Vec::new();
+        self.wedges = Vec::new();
         let materials = self
             .materials
             .into_iter()
@@ -393,12 +471,14 @@ impl<'a> Builder<'a> {
                     }
                 })
                 .collect();
-        Scene {
+        let scene = Scene {
             meshes,
             materials,
             origin: Origin::Flat,
             warnings: Vec::new(),
-        }
+        };
+        check_not_empty(&scene, self.path)?;
+        Ok(scene)
     }
 }
 
@@ -408,19 +488,112 @@ fn build_primitive(
     texcoords: &[[f32; 2]],
     normals: &[[f32; 3]],
 ) -> Primitive {
-    let has_uv = p.verts.iter().any(|v| v[1] != NONE);
-    let has_normals = p.verts.iter().all(|v| v[2] != NONE);
+    let has_uv = p.verts_vt.iter().any(|&t| t != NONE);
+    // (a corner without `vn` would have made the list)
+    let has_normals = !p.verts_vn.is_empty() && p.verts_vn.iter().all(|&n| n != NONE);
     Primitive {
         material: p.material,
-        positions: p.verts.iter().map(|v| positions[v[0] as usize]).collect(),
+        positions: p.verts.iter().map(|&v| positions[v as usize]).collect(),
         texcoords: has_uv.then(|| {
-            p.verts
+            p.verts_vt
                 .iter()
-                .map(|v| texcoords.get(v[1] as usize).copied().unwrap_or([0.0; 2]))
+                .map(|&t| texcoords.get(t as usize).copied().unwrap_or([0.0; 2]))
                 .collect()
         }),
-        normals: has_normals.then(|| p.verts.iter().map(|v| normals[v[2] as usize]).collect()),
+        normals: has_normals.then(|| p.verts_vn.iter().map(|&n| normals[n as usize]).collect()),
         indices: p.indices,
         ..Primitive::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file using every statement, polygons, relative indices, objects,
+    /// materials, and faces before and after the first corner with `vt`.
+    fn sample() -> String {
+        let mut s = String::from("# sample\nmtllib none.mtl\n");
+        for i in 0..40 {
+            let (x, y) = ((i % 7) as f32 * 0.5, (i / 7) as f32 * 0.25);
+            s += &format!("v {x} {y} {}\nv {} {y} 0.5\n", i % 3, x + 1.0);
+        }
+        s += "f 1 2 3\nf 2 3 4 5\nf -1 -2 -3\n";
+        s += "vt 0 0\nvt 1 0.5\nvn 0 0 1\n";
+        for i in 0..30 {
+            let a = i + 1;
+            match i % 6 {
+                0 => s += &format!("o part{i}\n"),
+                1 => s += &format!("usemtl m{}\n", i % 4),
+                2 => s += "g group\ns off\n",
+                _ => {}
+            }
+            s += &format!(
+                "f {a} {} {}\nf {a}/1 {}/2 {}/1/1 {}\nf -3//1 -2//1 -1//1\n",
+                a + 1,
+                a + 2,
+                a + 1,
+                a + 2,
+                a + 3
+            );
+        }
+        s
+    }
+
+    fn read(text: &str, batch: usize, chunk: usize) -> Result<Scene, ReadError> {
+        let cursor = std::io::Cursor::new(text.as_bytes().to_vec());
+        read_obj_batches(Vec::new(), cursor, Path::new("t.obj"), batch, chunk)
+    }
+
+    fn same(a: &Result<Scene, ReadError>, b: &Result<Scene, ReadError>) -> bool {
+        match (a, b) {
+            (Ok(a), Ok(b)) => a.meshes == b.meshes && a.materials == b.materials,
+            (Err(a), Err(b)) => a.to_string() == b.to_string(),
+            _ => false,
+        }
+    }
+
+    /// Chunks and batches of any size read what one chunk reads: the same
+    /// meshes, and for a bad line anywhere the same error at the same line.
+    /// (Fails when a chunk starts at the wrong counts or line, or when an
+    /// event lands between the wrong corners.)
+    #[test]
+    fn any_cut_reads_what_one_chunk_reads() {
+        let text = sample();
+        let all = text.len() + 1;
+        let whole = read(&text, all, all);
+        assert!(whole.is_ok());
+        let sizes = [(1, 1), (7, 3), (64, 16), (100, 1), (4096, 50), (all, 33)];
+        for (batch, chunk) in sizes {
+            let r = read(&text, batch, chunk);
+            assert!(
+                same(&whole, &r),
+                "{batch} {chunk} {:?} {:?}",
+                whole.as_ref().map(|s| &s.meshes),
+                r.as_ref().map(|s| &s.meshes)
+            );
+        }
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, bad) in [
+            (5, "v 1 x 2"),
+            (90, "f 1 2 999"),
+            (100, "f 0 1 2"),
+            (120, "vt"),
+        ]
+        .into_iter()
+        .chain((0..lines.len()).step_by(37).map(|i| (i, "f 1 2")))
+        {
+            let mut broken = lines.clone();
+            broken[i] = bad;
+            let broken = broken.join("\n");
+            let one = read(&broken, all, all);
+            assert_eq!(one.as_ref().err().and_then(|e| e.line()), Some(i + 1));
+            for (batch, chunk) in sizes {
+                assert!(
+                    same(&one, &read(&broken, batch, chunk)),
+                    "{bad} {batch} {chunk}"
+                );
+            }
+        }
     }
 }
