@@ -114,24 +114,26 @@ pub(super) fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
 }
 
 /// Drops vertices no triangle refers to and renumbers the rest in order of
-/// first use. Every index must already be `< positions.len()`.
-pub(super) fn compact(p: Primitive) -> Primitive {
+/// first use. Every index must already be `< positions.len()`. The indices
+/// are renumbered in place, and vertices already in that order stay where
+/// they are.
+pub(super) fn compact(mut p: Primitive) -> Primitive {
     const UNSEEN: u32 = u32::MAX;
     let mut remap = vec![UNSEEN; p.positions.len()];
     let mut order: Vec<u32> = Vec::new();
-    let indices = p
-        .indices
-        .iter()
-        .map(|&i| {
-            debug_assert!((i as usize) < remap.len());
-            let r = &mut remap[i as usize];
-            if *r == UNSEEN {
-                *r = order.len() as u32;
-                order.push(i);
-            }
-            *r
-        })
-        .collect();
+    for i in &mut p.indices {
+        debug_assert!((*i as usize) < remap.len());
+        let r = &mut remap[*i as usize];
+        if *r == UNSEEN {
+            *r = order.len() as u32;
+            order.push(*i);
+        }
+        *i = *r;
+    }
+    drop(remap);
+    if order.len() == p.positions.len() && order.iter().enumerate().all(|(k, &i)| k == i as usize) {
+        return p;
+    }
     fn pick<T: Copy>(values: &[T], order: &[u32]) -> Vec<T> {
         order.iter().map(|&i| values[i as usize]).collect()
     }
@@ -157,6 +159,6 @@ pub(super) fn compact(p: Primitive) -> Primitive {
                 tangents: t.tangents.as_deref().map(|v| pick(v, &order)),
             })
             .collect(),
-        indices,
+        indices: p.indices,
     }
 }

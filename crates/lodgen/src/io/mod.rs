@@ -28,6 +28,8 @@ mod meshopt_in;
 mod obj;
 mod obj_parse;
 mod ply;
+mod ply_binary;
+mod ply_header;
 mod smf;
 
 pub use common::{ReadOptions, DECODED_BYTES_FLOOR, DECODED_BYTES_PER_INPUT_BYTE};

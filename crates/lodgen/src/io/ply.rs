@@ -18,86 +18,18 @@ use std::path::Path;
 
 use super::common::{check_not_empty, compact, file_stem};
 use super::error::{ErrorKind, Location, ReadError};
+use super::ply_binary;
+use super::ply_header::{decode, invalid, parse_header, Element, Encoding, Kind, Role, Scalar};
 use crate::scene::{Origin, Primitive, Scene, SourceMesh};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Scalar {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    F32,
-    F64,
-}
-
-impl Scalar {
-    fn parse(name: &str) -> Option<Scalar> {
-        Some(match name {
-            "char" | "int8" => Scalar::I8,
-            "uchar" | "uint8" => Scalar::U8,
-            "short" | "int16" => Scalar::I16,
-            "ushort" | "uint16" => Scalar::U16,
-            "int" | "int32" => Scalar::I32,
-            "uint" | "uint32" => Scalar::U32,
-            "float" | "float32" => Scalar::F32,
-            "double" | "float64" => Scalar::F64,
-            _ => return None,
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Scalar::I8 | Scalar::U8 => 1,
-            Scalar::I16 | Scalar::U16 => 2,
-            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
-            Scalar::F64 => 8,
-        }
-    }
-
-    fn is_integer(self) -> bool {
-        !matches!(self, Scalar::F32 | Scalar::F64)
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Kind {
-    Scalar(Scalar),
-    List { count: Scalar, item: Scalar },
-}
-
-#[derive(Debug)]
-struct Property {
-    name: String,
-    kind: Kind,
-}
-
-#[derive(Debug)]
-struct Element {
-    name: String,
-    count: usize,
-    props: Vec<Property>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Encoding {
-    Ascii,
-    Little,
-    Big,
-}
-
-/// What the reader does with each property of the `vertex` element.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Role {
-    Skip,
-    Position(usize),
-    Normal(usize),
-    Uv(usize),
-}
 
 /// Reads a PLY file from its bytes; `path` names it in errors.
 pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
+    read_ply_with(src, path, true)
+}
+
+/// [`read_ply`]; `fast`: binary vertices and faces through `ply_binary`
+/// (else record by record, the reference the tests compare it with).
+fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError> {
     let (encoding, elements, body_start, header_lines) = parse_header(src, path)?;
     let vertex_count = elements
         .iter()
@@ -123,6 +55,31 @@ pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
         let has_normals = roles.iter().any(|r| matches!(r, Role::Normal(_)));
         let has_uv = roles.iter().any(|r| matches!(r, Role::Uv(_)));
         let index_list = index_list_of(element, path)?;
+        if fast && encoding != Encoding::Ascii {
+            // fixed-size vertices and face lists: the record loop without
+            // per-value calls (same values, same errors)
+            let big = encoding == Encoding::Big;
+            let rest = &body.bytes[body.pos..];
+            let all_scalar = element
+                .props
+                .iter()
+                .enumerate()
+                .all(|(i, p)| Some(i) == index_list || matches!(p.kind, Kind::Scalar(_)));
+            if element.name == "vertex" && all_scalar {
+                let out = ply_binary::VertexArrays {
+                    positions: &mut positions,
+                    normals: has_normals.then_some(&mut normals),
+                    texcoords: has_uv.then_some(&mut texcoords),
+                };
+                body.pos += ply_binary::vertices(rest, element, &roles, big, path, out)?;
+                continue;
+            }
+            if let (Some(list), "face", true) = (index_list, element.name.as_str(), all_scalar) {
+                let at = (element, list, vertex_count);
+                body.pos += ply_binary::faces(rest, at, big, path, &mut indices)?;
+                continue;
+            }
+        }
         for index in 0..element.count {
             body.begin(&element.name, index)?;
             let (p, n, uv) = read_record(&mut body, element, index, &roles, index_list, &mut list)?;
@@ -299,10 +256,6 @@ fn add_indices(
     Ok(())
 }
 
-fn invalid(path: &Path, location: Location, message: &str) -> ReadError {
-    ReadError::new(path, location, ErrorKind::Invalid(message.to_owned()))
-}
-
 fn finite3(v: [f64; 3], body: &Body<'_>, index: usize, what: &str) -> Result<[f32; 3], ReadError> {
     let out = v.map(|x| x as f32);
     if let Some(&bad) = out.iter().find(|x| !x.is_finite()) {
@@ -361,105 +314,6 @@ fn vertex_roles(element: &Element, path: &Path) -> Result<Vec<Role>, ReadError> 
         }
     }
     Ok(roles)
-}
-
-/// Parses the header; returns the encoding, the elements, the byte offset
-/// of the body and the number of header lines.
-fn parse_header(
-    src: &[u8],
-    path: &Path,
-) -> Result<(Encoding, Vec<Element>, usize, usize), ReadError> {
-    let mut pos = 0;
-    let mut line_no = 0;
-    let mut encoding = None;
-    let mut elements: Vec<Element> = Vec::new();
-    loop {
-        let Some(len) = src[pos..].iter().position(|&b| b == b'\n') else {
-            return Err(ReadError::new(
-                path,
-                Location::Line(line_no + 1),
-                ErrorKind::Truncated("the header has no `end_header` line".to_owned()),
-            ));
-        };
-        line_no += 1;
-        let raw = &src[pos..pos + len];
-        pos += len + 1;
-        let line = String::from_utf8_lossy(raw);
-        let line = line.trim_end_matches('\r');
-        let here = Location::Line(line_no);
-        let syntax = |expected: &str| {
-            ReadError::new(
-                path,
-                here.clone(),
-                ErrorKind::Syntax {
-                    expected: expected.to_owned(),
-                    found: line.to_owned(),
-                },
-            )
-        };
-        let mut tokens = line.split_ascii_whitespace();
-        if line_no == 1 {
-            if line != "ply" {
-                return Err(syntax("`ply` on the first line"));
-            }
-            continue;
-        }
-        match tokens.next() {
-            Some("format") => {
-                encoding = Some(match (tokens.next(), tokens.next()) {
-                    (Some("ascii"), Some(_)) => Encoding::Ascii,
-                    (Some("binary_little_endian"), Some(_)) => Encoding::Little,
-                    (Some("binary_big_endian"), Some(_)) => Encoding::Big,
-                    _ => {
-                        return Err(syntax(
-                            "`format ascii|binary_little_endian|binary_big_endian 1.0`",
-                        ))
-                    }
-                });
-            }
-            Some("element") => {
-                let (Some(name), Some(count), None) = (tokens.next(), tokens.next(), tokens.next())
-                else {
-                    return Err(syntax("`element NAME COUNT`"));
-                };
-                let count: usize = count.parse().map_err(|_| syntax("`element NAME COUNT`"))?;
-                elements.push(Element {
-                    name: name.to_owned(),
-                    count,
-                    props: Vec::new(),
-                });
-            }
-            Some("property") => {
-                let Some(element) = elements.last_mut() else {
-                    return Err(syntax("`element` before `property`"));
-                };
-                let words: Vec<&str> = tokens.collect();
-                let kind_and_name = match words.as_slice() {
-                    ["list", count, item, name] => Scalar::parse(count)
-                        .zip(Scalar::parse(item))
-                        .filter(|(c, _)| c.is_integer())
-                        .map(|(count, item)| (Kind::List { count, item }, name)),
-                    [ty, name] => Scalar::parse(ty).map(|t| (Kind::Scalar(t), name)),
-                    _ => None,
-                };
-                let Some((kind, name)) = kind_and_name else {
-                    return Err(syntax(
-                        "`property TYPE NAME` or `property list COUNT_TYPE TYPE NAME`",
-                    ));
-                };
-                element.props.push(Property {
-                    name: (*name).to_owned(),
-                    kind,
-                });
-            }
-            Some("end_header") => break,
-            Some("comment") | Some("obj_info") | None => {}
-            Some(_) => return Err(syntax("a PLY header line")),
-        }
-    }
-    let encoding =
-        encoding.ok_or_else(|| invalid(path, Location::File, "the header has no `format` line"))?;
-    Ok((encoding, elements, pos, line_no))
 }
 
 /// The body cursor: lines and tokens for ascii, bytes for binary.
@@ -588,22 +442,7 @@ impl<'a> Body<'a> {
             return Err(self.truncated(element, index));
         };
         self.pos += size;
-        let big = self.encoding == Encoding::Big;
-        let mut a = [0u8; 8];
-        a[..size].copy_from_slice(b);
-        if big {
-            a[..size].reverse();
-        }
-        Ok(match ty {
-            Scalar::I8 => a[0] as i8 as f64,
-            Scalar::U8 => a[0] as f64,
-            Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
-            Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
-            Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-            Scalar::F64 => f64::from_le_bytes(a),
-        })
+        Ok(decode(ty, self.encoding == Encoding::Big, b))
     }
 
     fn skip(
@@ -626,5 +465,162 @@ impl<'a> Body<'a> {
             .ok_or_else(|| self.truncated(element, index))?;
         self.pos = end;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A binary PLY: `vertex_props` / `face_props` are (type, name) with
+    /// `list` for the index list; values from a small deterministic mesh
+    /// (quads and triangles), extra properties filled with their index.
+    fn file(big: bool, vertex_props: &[(&str, &str)], face_props: &[(&str, &str)]) -> Vec<u8> {
+        let format = if big { "big" } else { "little" };
+        let mut h = format!("ply\nformat binary_{format}_endian 1.0\nelement vertex 9\n");
+        for (ty, name) in vertex_props {
+            h += &format!("property {ty} {name}\n");
+        }
+        h += "element face 5\n";
+        for (ty, name) in face_props {
+            h += &format!("property {ty} {name}\n");
+        }
+        h += "end_header\n";
+        let mut out = h.into_bytes();
+        let put = |out: &mut Vec<u8>, ty: &str, v: f64| {
+            let mut b = match ty {
+                "char" => vec![v as i8 as u8],
+                "uchar" => vec![v as u8],
+                "short" => (v as i16).to_le_bytes().to_vec(),
+                "ushort" => (v as u16).to_le_bytes().to_vec(),
+                "int" => (v as i32).to_le_bytes().to_vec(),
+                "uint" => (v as u32).to_le_bytes().to_vec(),
+                "float" => (v as f32).to_le_bytes().to_vec(),
+                "double" => v.to_le_bytes().to_vec(),
+                _ => unreachable!("{ty}"),
+            };
+            if big {
+                b.reverse();
+            }
+            out.extend_from_slice(&b);
+        };
+        for i in 0..9 {
+            for (k, (ty, name)) in vertex_props.iter().enumerate() {
+                let v = match *name {
+                    "x" => (i % 3) as f64 * 0.5,
+                    "y" => (i / 3) as f64 * 0.25,
+                    "z" | "u" => (i % 2) as f64,
+                    "nz" | "v" => 1.0 - (i % 2) as f64 * 0.5,
+                    _ => k as f64,
+                };
+                put(&mut out, ty, v);
+            }
+        }
+        let faces: [&[u32]; 5] = [
+            &[0, 1, 4],
+            &[1, 2, 5, 4],
+            &[3, 4, 7, 6],
+            &[4, 5, 8],
+            &[8, 7, 6, 3],
+        ];
+        for f in faces {
+            for (k, (ty, _)) in face_props.iter().enumerate() {
+                if let Some(types) = ty.strip_prefix("list ") {
+                    let (count, item) = types.split_once(' ').unwrap();
+                    put(&mut out, count, f.len() as f64);
+                    for &i in f {
+                        put(&mut out, item, i as f64);
+                    }
+                } else {
+                    put(&mut out, ty, k as f64);
+                }
+            }
+        }
+        out
+    }
+
+    /// (type, name) of each property.
+    type Props<'a> = Vec<(&'a str, &'a str)>;
+
+    fn same(a: &Result<Scene, ReadError>, b: &Result<Scene, ReadError>) -> bool {
+        match (a, b) {
+            (Ok(a), Ok(b)) => a.meshes == b.meshes,
+            (Err(a), Err(b)) => a.to_string() == b.to_string() && a.location == b.location,
+            _ => false,
+        }
+    }
+
+    /// The fast binary paths read what the record-by-record reader reads,
+    /// for every prefix of each file and for each byte of its body set to
+    /// 0xff or 0x80 (NaNs, negative and huge indices and counts): the same
+    /// mesh or the same error at the same element. (Fails when a fast path
+    /// skips a check, reports another record, or misreads a type.)
+    #[test]
+    fn fast_binary_paths_read_what_the_record_reader_reads() {
+        let xyz = [("float", "x"), ("float", "y"), ("float", "z")];
+        let layouts: Vec<(Props, Props)> = vec![
+            (xyz.to_vec(), vec![("list uchar int", "vertex_indices")]),
+            (xyz.to_vec(), vec![("list uchar uint", "vertex_indices")]),
+            (
+                vec![
+                    ("double", "x"),
+                    ("uchar", "flag"),
+                    ("double", "y"),
+                    ("double", "z"),
+                    ("float", "nx"),
+                    ("float", "ny"),
+                    ("float", "nz"),
+                    ("float", "u"),
+                    ("float", "v"),
+                ],
+                vec![
+                    ("short", "a"),
+                    ("list ushort short", "vertex_indices"),
+                    ("float", "b"),
+                ],
+            ),
+            (
+                vec![("int", "z"), ("short", "y"), ("char", "x")],
+                vec![("list int uchar", "vertex_index"), ("uint", "c")],
+            ),
+        ];
+        let path = Path::new("t.ply");
+        for big in [false, true] {
+            for (vertex, face) in &layouts {
+                let bytes = file(big, vertex, face);
+                let body = bytes
+                    .windows(11)
+                    .position(|w| w == b"end_header\n")
+                    .unwrap()
+                    + 11;
+                let reference = read_ply_with(&bytes, path, false);
+                assert!(reference.is_ok(), "{vertex:?} {face:?}");
+                assert!(same(&reference, &read_ply_with(&bytes, path, true)));
+                for len in body..bytes.len() {
+                    let cut = &bytes[..len];
+                    let (a, b) = (
+                        read_ply_with(cut, path, false),
+                        read_ply_with(cut, path, true),
+                    );
+                    assert!(same(&a, &b), "cut at {len}: {:?} / {:?}", a.err(), b.err());
+                }
+                for at in body..bytes.len() {
+                    for value in [0xff, 0x80] {
+                        let mut bad = bytes.clone();
+                        bad[at] = value;
+                        let (a, b) = (
+                            read_ply_with(&bad, path, false),
+                            read_ply_with(&bad, path, true),
+                        );
+                        assert!(
+                            same(&a, &b),
+                            "byte {at} = {value}: {:?} / {:?}",
+                            a.err(),
+                            b.err()
+                        );
+                    }
+                }
+            }
+        }
     }
 }
