@@ -67,6 +67,18 @@ function indexHash(p) {
   return f.value();
 }
 
+// The hash of the drawn vertices' positions as f32 (view.rs position_hash):
+// quantized geometry holds grid points q - s, decoded as the stream decodes
+// them.
+function positionHash(p) {
+  const h = p.decoder.header, n = 3 * (h.baseVertices + p.applied), f = fnv(), x = new Float32Array(1), bits = new Uint32Array(x.buffer);
+  for (let i = 0; i < n; i++) {
+    x[0] = p.quantized ? h.center[i % 3] + (p.vpos[i] / h.scale) * h.half : p.vpos[i];
+    f.put(bits[0]);
+  }
+  return f.value();
+}
+
 // With wedges: each drawn corner's group and the values in the geometry's
 // attributes (f32 bits), channels in the stream's order; null when a
 // channel is not drawn.
@@ -108,7 +120,7 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
     const d = draw();
     const t = t0() - start; // drawn (the hash below is the check's, not the loader's)
     events.push({ level: e.level, records: e.records, triangles: e.triangles, drawn: d.triangles, variance: d.variance,
-      hash: hash ? indexHash(p) : 0, attr: hash ? attributeHash(p) : null,
+      hash: hash ? indexHash(p) : 0, pos: hash ? positionHash(p) : 0, attr: hash ? attributeHash(p) : null,
       attributes: Object.keys(p.geometry.attributes).sort().join(' '), t });
   });
   await p.refine(stopAt);

@@ -4,11 +4,12 @@
 //   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--out DIR]      (or env LODGEN_BIN)
 //
 // FILE.glb is a `lodgen --progressive` output. Expectations come from
-// `BIN view --print-levels FILE.glb` (each level's records, triangles and
-// index hash). Checks, with three.js, GLTFLoader and MeshoptDecoder from npm:
+// `BIN view --print-levels FILE.glb` (each level's records, triangles,
+// index hash and position hash, from lodgen's own decoder). Checks, with three.js, GLTFLoader and MeshoptDecoder from npm:
 // loadProgressive shows the coarsest level first, then one "level" event per
 // MSFT_lod level, coarse to fine, each drawing exactly the level's triangles
-// (renderer.info) with the level's index hash; the first pixel is the
+// (renderer.info) with the level's index hash and its vertices at the
+// positions Rust decodes (f32 bits); the first pixel is the
 // coarsest level; the GLB is read from its start in one request (JSON,
 // coarsest level, stream); stopping at a middle level without prefetch reads
 // the stream's base on that request, the rest up to the level by one range
@@ -18,7 +19,7 @@
 // the coverageDistance hook, is a THREE.LOD with every level (its triangle
 // counts), switching level where the file's MSFT_screencoverage says.
 // ATTR.glb (a stream with wedges, e.g. spot.obj's UVs and normals): every
-// level draws the level's triangles, index hash and corner attribute hash
+// level draws the level's triangles, index and position hashes and corner attribute hash
 // (each corner's group and drawn attribute values, `attributeHash`), with
 // the streamed UVs and normals as three.js attributes.
 // Exit 0 on success, 1 on failure, 2 on bad usage.
@@ -93,9 +94,9 @@ async function main() {
     r.events.forEach((e, i) => {
       const lv = want[i];
       if (!lv) return;
-      check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash,
-        `level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash} ` +
-          `(expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}) at ${e.t.toFixed(0)} ms`);
+      check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash && e.pos === lv.positionHash,
+        `level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash}, position hash ${e.pos} ` +
+          `(expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.positionHash}) at ${e.t.toFixed(0)} ms`);
     });
     check(r.firstPixel.drawn === want[0].triangles && r.firstPixel.variance > MIN_VARIANCE,
       `first pixel: the coarsest level drawn (${r.firstPixel.drawn} triangles, variance ${r.firstPixel.variance.toFixed(1)}) at ${r.firstPixel.t.toFixed(0)} ms`);
@@ -132,9 +133,10 @@ async function main() {
       a.events.forEach((e, i) => {
         const lv = want[want.length - 1 - i];
         if (!lv) return;
-        check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash && e.attr === lv.attributeHash,
+        check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash && e.attr === lv.attributeHash && e.pos === lv.positionHash,
           `attributes: level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash}, corner attribute hash ` +
-            `${e.attr} (expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.attributeHash}); attributes ${e.attributes}`);
+            `${e.attr}, position hash ${e.pos} (expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.attributeHash}, ` +
+            `${lv.positionHash}); attributes ${e.attributes}`);
       });
       const last = a.events[a.events.length - 1];
       check(/\bnormal\b/.test(last.attributes) && /\buv\b/.test(last.attributes) && last.variance > MIN_VARIANCE,

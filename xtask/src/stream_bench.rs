@@ -1,4 +1,4 @@
-//! `cargo xtask stream-bench [--quick] [--runs N]`: time to first pixel and
+//! `cargo xtask stream-bench [--quick] [--runs N] [--bytes]`: time to first pixel and
 //! to full detail of a progressive file against the plain compressed full
 //! mesh, over a throttled local line (10 Mbit/s, 50 ms latency, set in the
 //! server), in headless Chromium with three.js (`tests/js/stream-bench.mjs`).
@@ -14,7 +14,8 @@
 //!
 //! and prints the table the README's Streaming section quotes, with the
 //! stream's bytes against the plain file's and each time's floor (one
-//! latency + the bytes needed at the line rate).
+//! latency + the bytes needed at the line rate). `--bytes` writes the files
+//! and prints the stream's bytes per column kind instead (no browser).
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -44,6 +45,39 @@ fn stream_bytes(path: &Path) -> Result<(usize, usize)> {
     Ok((len, bytes.len() - bin.len() + off))
 }
 
+/// Prints where the stream's bytes go, per column kind (`--bytes`).
+fn print_columns(id: &str, path: &Path, plain: usize) -> Result<()> {
+    let bytes = std::fs::read(path)?;
+    let (root, bin) = lodgen::progressive::parse_glb(&bytes)?;
+    let found = lodgen::progressive::find(&root)?.context("no LODGEN_progressive")?;
+    let (_, off, len) = found.range;
+    let stream = &bin[off..off + len];
+    let h = lodgen_pm::stream::decode_header(stream)?;
+    let stats = lodgen_pm::stream::column_stats(stream)?;
+    println!(
+        "\n{id}: stream {len} B = {:.3}× the plain file ({plain} B); {} splits, {:.2} B/split; file bytes before the stream {}",
+        len as f64 / plain as f64,
+        h.split_count,
+        len as f64 / h.split_count.max(1) as f64,
+        bytes.len() - bin.len() + off,
+    );
+    println!(
+        "{:<20} {:>10} {:>10} {:>7} {:>9}",
+        "column", "values", "bytes", "share", "B/split"
+    );
+    for s in stats {
+        println!(
+            "{:<20} {:>10} {:>10} {:>6.1}% {:>9.3}",
+            s.name,
+            s.count,
+            s.bytes,
+            100.0 * s.bytes as f64 / len as f64,
+            s.bytes as f64 / h.split_count.max(1) as f64
+        );
+    }
+    Ok(())
+}
+
 /// The time (ms) `bytes` take on the bench's line, one latency included.
 fn line_ms(bytes: usize) -> f64 {
     LATENCY_MS + bytes as f64 * 8.0 / (MBIT * 1e6) * 1e3
@@ -52,17 +86,23 @@ fn line_ms(bytes: usize) -> f64 {
 const MBIT: f64 = 10.0;
 const LATENCY_MS: f64 = 50.0;
 
-pub fn run(args: &[String]) -> Result<()> {
-    let mut quick = false;
-    let mut runs = 3;
+/// `--quick`, `--bytes`, `--runs N` (default 3).
+fn parse_args(args: &[String]) -> Result<(bool, bool, usize)> {
+    let (mut quick, mut bytes_only, mut runs) = (false, false, 3);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => quick = true,
+            "--bytes" => bytes_only = true,
             "--runs" => runs = it.next().context("--runs needs a number")?.parse()?,
             other => bail!("stream-bench: unknown argument {other:?}"),
         }
     }
+    Ok((quick, bytes_only, runs))
+}
+
+pub fn run(args: &[String]) -> Result<()> {
+    let (quick, bytes_only, runs) = parse_args(args)?;
     let root = crate::workspace_root();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
@@ -73,7 +113,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let exe = root.join("target/release/lodgen");
     let js = root.join("tests/js");
     anyhow::ensure!(
-        js.join("node_modules/three").is_dir(),
+        bytes_only || js.join("node_modules/three").is_dir(),
         "tests/js/node_modules is missing: cd tests/js && npm ci"
     );
     let dir = root.join("target/stream-bench");
@@ -100,6 +140,10 @@ pub fn run(args: &[String]) -> Result<()> {
         )?;
         let levels = ["--levels", "100%,50%,10%,2%", "--progressive"];
         lodgen(&exe, &input, &prog, &[&levels[..], &q].concat())?;
+        if bytes_only {
+            print_columns(id, &prog, std::fs::metadata(&plain)?.len() as usize)?;
+            continue;
+        }
         let json = dir.join(format!("{id}.json"));
         let status = Command::new("node")
             .arg(js.join("stream-bench.mjs"))
@@ -133,6 +177,9 @@ pub fn run(args: &[String]) -> Result<()> {
             stream as f64 / plain_bytes as f64,
             floors,
         ));
+    }
+    if bytes_only {
+        return Ok(());
     }
     println!(
         "\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; median of {runs}"

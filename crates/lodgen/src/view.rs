@@ -77,6 +77,14 @@ pub fn index_hash(triangles: &[[u32; 3]]) -> u32 {
     h
 }
 
+/// FNV-1a (32 bit) over every vertex's position (`f32` bits, x y z), as
+/// little-endian `u32`: the hash the page's `positionHash()` computes from
+/// the positions it draws.
+pub fn position_hash(positions: &[[f32; 3]]) -> u32 {
+    let words: Vec<[u32; 3]> = positions.iter().map(|p| p.map(f32::to_bits)).collect();
+    index_hash(&words)
+}
+
 /// FNV-1a (32 bit) over every corner's wedge group and values (`f32` bits),
 /// as little-endian `u32`, corners in index order: the hash the page's
 /// `attributeHash()` computes.
@@ -236,8 +244,8 @@ impl ViewData {
     }
 
     /// Per level (finest first): record count, triangle and vertex counts
-    /// and the [`index_hash`] of the mesh the page must show after that many
-    /// records, and with attributes the [`attribute_hash`] of its corners.
+    /// and the [`index_hash`] and [`position_hash`] of the mesh the page must
+    /// show after that many records, and with attributes the [`attribute_hash`] of its corners.
     /// What `lodgen view --print-levels` prints and the browser test asserts.
     pub fn level_summary(&self) -> anyhow::Result<Value> {
         let d = decode_with_attributes(&self.stream).context("decoding the stream")?;
@@ -253,6 +261,7 @@ impl ViewData {
                     "triangles": m.triangles.len(),
                     "vertices": m.positions.len(),
                     "indexHash": index_hash(&m.triangles),
+                    "positionHash": position_hash(&m.positions),
                 });
                 if let (Some(a), Some(w)) = (&d.attributes, cursor.wedges()) {
                     level["attributeHash"] = json!(attribute_hash(w, a));

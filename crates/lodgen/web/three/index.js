@@ -269,7 +269,7 @@ export class ProgressiveMesh extends EventDispatcher {
     g.boundingSphere = this.quantized ? new Sphere(new Vector3(0, 0, 0), Math.sqrt(3))
       : new Sphere(new Vector3(...h.center), h.half * Math.sqrt(3));
     this.geometry = g;
-    this.writeVertices(0, h.baseVertices);
+    this.writeBase();
     this.indices.set(d.baseTri, 0);
     this.nt = h.baseTriangles;
     this.finishUpdate(0, 0, 0, h.baseTriangles * 3);
@@ -343,10 +343,26 @@ export class ProgressiveMesh extends EventDispatcher {
     g.setDrawRange(0, n);
   }
 
-  writeVertices(from, to) {
-    const d = this.decoder, h = d.header, a = this.vpos, s = h.scale;
-    if (this.quantized) for (let i = 3 * from; i < 3 * to; i++) a[i] = d.q[i] - s;
-    else for (let v = from; v < to; v++) d.deq(d.q, v, a, 3 * v);
+  // The base vertices' positions.
+  writeBase() {
+    const d = this.decoder, a = this.vpos, s = d.header.scale, n = 3 * d.header.baseVertices;
+    if (this.quantized) for (let i = 0; i < n; i++) a[i] = d.baseQ[i] - s;
+    else a.set(d.basePositions.subarray(0, n), 0);
+  }
+
+  // Records a .. k's positions, in order: each record's v1 and v0 at their
+  // chunk-end grid points, so a level shows exactly its positions even when
+  // the decoder is already further on.
+  writeVertices(a, k) {
+    const d = this.decoder, out = this.vpos, s = d.header.scale, base = d.header.baseVertices;
+    const q = this.quantized, f1 = q ? d.q1 : d.p1, f0 = q ? d.q0 : d.p0, off = q ? s : 0;
+    for (let i = a; i < k; i++) {
+      const o1 = 3 * d.v1[i], o0 = 3 * (base + i), r = 3 * i;
+      for (let j = 0; j < 3; j++) {
+        out[o1 + j] = f1[r + j] - off;
+        out[o0 + j] = f0[r + j] - off;
+      }
+    }
   }
 
   finishUpdate(vFrom, vTo, iFrom, iTo) {
@@ -366,11 +382,12 @@ export class ProgressiveMesh extends EventDispatcher {
     normal.needsUpdate = true;
   }
 
-  // Area-weighted vertex normals of the drawn triangles, from the grid
-  // points (one scale on every axis, so the directions are the positions'),
+  // Area-weighted vertex normals of the drawn triangles, from the drawn
+  // positions (grid points: one scale on every axis, so the directions are
+  // the positions'),
   // as snorm8 like `--quantize` writes them, into `out` (3 per vertex).
   computeNormals(out) {
-    const d = this.decoder, q = d.q, idx = this.indices, n3 = 3 * this.nt;
+    const d = this.decoder, q = this.vpos, idx = this.indices, n3 = 3 * this.nt;
     const nv = d.header.baseVertices + this.applied;
     const acc = this.normalSums || (this.normalSums = new Float32Array(3 * d.header.totalVertices));
     acc.fill(0, 0, 3 * nv);
@@ -495,8 +512,8 @@ export class ProgressiveMesh extends EventDispatcher {
     }
     this.nt = d.fStart[k];
     this.mark(`indices ${k}`);
-    // vertices: grid points at the chunk's end (the decoder's q)
-    this.writeVertices(vLo, base + k);
+    // vertices: grid points at the chunk's end
+    this.writeVertices(a, k);
     this.mark(`vertices ${k}`);
     this.applied = k;
     this.finishUpdate(vLo, base + k, iLo, f1);

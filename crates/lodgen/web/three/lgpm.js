@@ -1,4 +1,4 @@
-// LODGEN_progressive stream decoder (layout version 3, docs/LODGEN_progressive.md),
+// LODGEN_progressive stream decoder (layout version 4, docs/LODGEN_progressive.md),
 // a second, independent implementation of crates/lodgen-pm/src/progressive/stream/.
 // Used by the `lodgen view` page (viewer.js) and the three.js loader
 // (three/index.js). The columns are decoded by meshoptimizer's
@@ -72,7 +72,7 @@ export function parseHeader(bytes) {
   const r = new Bytes(bytes, 0, 0);
   for (const m of [0x4c, 0x47, 0x50, 0x4d]) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
   const version = r.byte();
-  if (version !== 3) throw new Error(`unsupported stream version ${version}`);
+  if (version !== 4) throw new Error(`unsupported stream version ${version}`);
   const flags = r.byte();
   if (flags & ~3) throw new Error(`unknown flags ${flags}`);
   const bits = r.byte();
@@ -398,6 +398,8 @@ export class StreamDecoder {
     this.fStart[0] = h.baseTriangles;
     this.corners = new U32List();
     this.p1 = new Float32Array(3 * ns);
+    this.q1 = new Uint16Array(3 * ns); // grid points of p1 / p0
+    this.q0 = new Uint16Array(3 * ns);
     this.p0 = new Float32Array(3 * ns);
     this.pm = new Float32Array(3 * ns);
     this.scratch = new Uint32Array(64);
@@ -435,6 +437,7 @@ export class StreamDecoder {
     }
     cols.finish("the base chunk");
     this.baseTri = flat;
+    this.baseQ = q.slice(0, 3 * nv);
     this.basePositions = new Float32Array(nv * 3);
     for (let v = 0; v < nv; v++) this.deq(q, v, this.basePositions, 3 * v);
     this.cur = new Float32Array(h.totalVertices * 3);
@@ -625,14 +628,14 @@ export class StreamDecoder {
       const codes = cols.vertices("face code", 4, n);
       const extra = words(cols.u32("escape"), "escape");
       const mask = cols.bits("corner mask");
-      this.topo = { cols, wc: null, first: this.count, va: this.nv };
+      this.topo = { cols, wc: null, first: this.count, va: this.nv, rings: new U32List(8 * n + 8), ringEnd: new Uint32Array(n) };
       if (h.wedges) {
         // the wedges are coded in replay order: read their columns first
         this.topo.moved = cols.u16x4("moved position");
         this.topo.fresh = cols.u16x4("new position", n);
         this.topo.wc = this.wedgeColumns(cols);
       }
-      for (let i = 0; i < n; i++) this.replay(this.count + i, v1s[i], codes, i, extra, mask, this.topo.wc);
+      for (let i = 0; i < n; i++) this.replay(this.count + i, v1s[i], codes, i, extra, mask, this.topo);
       if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
       if (this.topo.wc) this.topo.wc.finish();
     }
@@ -642,14 +645,15 @@ export class StreamDecoder {
     const fresh = this.topo.fresh || cols.u16x4("new position", n);
     if (h.flags & 1) cols.u32("error", n);
     cols.finish("the chunk");
-    this.positions(first, n, moved, fresh, va);
+    this.positions(first, n, moved, fresh, va, this.topo);
     this.topo = null;
     this.count += n;
   }
 
-  // Replays record i (topology, and wedges with `wc`), appending it to the
-  // record columns.
-  replay(i, v1, codes, ci, extra, mask, wc) {
+  // Replays record i (topology, and wedges with `topo.wc`), appending it to
+  // the record columns and v0's ring to `topo.rings`.
+  replay(i, v1, codes, ci, extra, mask, topo) {
+    const wc = topo.wc;
     const h = this.header, v0 = this.nv, tri = this.tri;
     if (v1 >= v0) throw new Error(`split vertex ${v1} does not exist yet`);
     const ring = this.ring(v1);
@@ -689,15 +693,22 @@ export class StreamDecoder {
     for (let c = 3 * first; c < 3 * this.nt; c++) this.append(c);
     this.v1[i] = v1;
     this.fStart[i + 1] = this.nt;
-    // the corners at v1 (ascending), each moved to v0 when the mask says so
-    const corners = this.corners, c0 = corners.n, next = this.nextC;
-    for (let c = this.head[v1]; c !== NONE; c = next[c]) if (mask.next()) corners.push(c);
+    // the corners at v1 (ascending), each moved to v0 when the mask (or,
+    // without one, the prediction) says so
+    const corners = this.corners, c0 = corners.n, next = this.nextC, flag = codes[4 * ci + 3];
+    if (flag > 1) throw new Error(`corner-edit flag ${flag}`);
+    if (flag === 1) {
+      for (let c = this.head[v1]; c !== NONE; c = next[c]) if (mask.next()) corners.push(c);
+    } else this.predictMask(v0, v1, first);
     for (let k = c0; k < corners.n; k++) {
       const c = corners.a[k];
       tri[c] = v0;
       this.moveCorner(c, v1, v0);
     }
     this.cStart[i + 1] = corners.n;
+    const around = this.ring(v0);
+    for (let k = 0; k < around.length; k++) topo.rings.push(around[k]);
+    topo.ringEnd[i - topo.first] = topo.rings.n;
     if (wc) {
       const cw = this.cw, end = 3 * this.nt;
       const wf = wingFaces(this.faces0.subarray(3 * first, end), v0, v1);
@@ -721,25 +732,64 @@ export class StreamDecoder {
     }
   }
 
-  // The third vertices (a, b) of record i's wing faces into w, or false.
-  wingsOf(i, w) {
-    const f = this.faces0, v0 = this.header.baseVertices + i, v1 = this.v1[i];
-    let n = 0;
-    for (let o = 3 * this.fStart[i]; o < 3 * this.fStart[i + 1] && n < 2; o += 3) {
-      const a = f[o], b = f[o + 1], c = f[o + 2];
-      if ((a !== v0 && b !== v0 && c !== v0) || (a !== v1 && b !== v1 && c !== v1)) continue;
-      let m = 0, x = -1;
-      if (a !== v0 && a !== v1) { m++; x = a; }
-      if (b !== v0 && b !== v1) { m++; x = b; }
-      if (c !== v0 && c !== v1) { m++; x = c; }
-      if (m === 1) w[n++] = x;
+  // The predicted corner edits of a split (topo.rs predict_mask), pushed on
+  // this.corners: the new faces' wings x cut v1's old triangles (below
+  // `first`) in two arcs; v0 takes the one starting at the old triangle
+  // with edge v1 -> x (x -> v1 when the face has v0 -> x), spreading across
+  // edges {v1, y}, y no wing.
+  predictMask(v0, v1, first) {
+    const tri = this.tri, next = this.nextC;
+    const old = this.oldBuf || (this.oldBuf = []), wings = this.wingList || (this.wingList = []);
+    const queue = this.queueBuf || (this.queueBuf = []);
+    old.length = 0; wings.length = 0; queue.length = 0;
+    for (let c = this.head[v1]; c !== NONE; c = next[c]) {
+      const t = (c / 3) | 0;
+      if (t < first && old[old.length - 1] !== t) old.push(t);
     }
-    return n === 2 && w[0] !== w[1];
+    if (!this.taken || this.taken.length < old.length) this.taken = new Uint8Array(2 * old.length + 16);
+    const taken = this.taken;
+    taken.fill(0, 0, old.length);
+    for (let t = first; t < this.nt; t++) {
+      const o = 3 * t, f0 = tri[o], f1 = tri[o + 1], f2 = tri[o + 2];
+      if ((f0 !== v0 && f1 !== v0 && f2 !== v0) || (f0 !== v1 && f1 !== v1 && f2 !== v1)) continue;
+      let m = 0, ix = -1;
+      for (let j = 0; j < 3; j++) if (tri[o + j] !== v0 && tri[o + j] !== v1) { m++; if (ix < 0) ix = j; }
+      if (m !== 1) continue;
+      const x = tri[o + ix];
+      wings.push(x);
+      const from = tri[o + ((ix + 1) % 3)] === v0 ? v1 : x, to = from === v1 ? x : v1;
+      for (let k = 0; k < old.length; k++) {
+        if (taken[k]) continue;
+        const p = 3 * old[k];
+        for (let j = 0; j < 3; j++) {
+          if (tri[p + j] === from && tri[p + ((j + 1) % 3)] === to) { taken[k] = 1; queue.push(k); break; }
+        }
+      }
+    }
+    while (queue.length) {
+      const o = 3 * old[queue.pop()];
+      for (let j = 0; j < 3; j++) {
+        const y = tri[o + j];
+        if (y === v1 || wings.includes(y)) continue;
+        for (let m = 0; m < old.length; m++) {
+          if (taken[m]) continue;
+          const p = 3 * old[m];
+          if (tri[p] === y || tri[p + 1] === y || tri[p + 2] === y) { taken[m] = 1; queue.push(m); }
+        }
+      }
+    }
+    let k = 0;
+    for (let c = this.head[v1]; c !== NONE; c = next[c]) {
+      const t = (c / 3) | 0;
+      if (t >= first) continue;
+      while (old[k] !== t) k++;
+      if (taken[k]) this.corners.push(c);
+    }
   }
 
   // Grid points at the chunk's end for records first .. first + n, then
   // each record's p1 / p0 / p_merged.
-  positions(first, n, movedSums, freshSums, va) {
+  positions(first, n, movedSums, freshSums, va, topo) {
     const q = this.q, lim = 2 * this.header.scale, slot = this.movedOf;
     // the moved vertices: distinct v1 < va, in order of first appearance
     const moved = [];
@@ -748,30 +798,33 @@ export class StreamDecoder {
       if (v < va && slot[v] < 0) { slot[v] = moved.length; moved.push(v); }
     }
     if (moved.length * 4 !== movedSums.length) throw new Error(`${movedSums.length / 4} moved positions for ${moved.length} moved vertices`);
-    const start = new Uint16Array(3 * moved.length);
     let px = 0, py = 0, pz = 0;
     for (let k = 0; k < moved.length; k++) {
       const v = moved[k], x = movedSums[4 * k], y = movedSums[4 * k + 1], z = movedSums[4 * k + 2];
       const r0 = x - px, r1 = y - py, r2 = z - pz;
       px = x; py = y; pz = z;
       for (let a = 0; a < 3; a++) {
-        start[3 * k + a] = q[3 * v + a];
         const e = (q[3 * v + a] + (a === 0 ? r0 : a === 1 ? r1 : r2)) & 0xffff;
         if (e > lim) throw new Error("position outside the grid");
         q[3 * v + a] = e;
       }
     }
-    const w = this.wingBuf || (this.wingBuf = new Int32Array(2));
+    // each new vertex predicted by its ring's centroid (rounded half up)
+    const rings = topo.rings.a, ends = topo.ringEnd;
     px = py = pz = 0;
     for (let j = 0; j < n; j++) {
       const i = first + j, v1 = this.v1[i], v0 = this.header.baseVertices + i;
       const x = freshSums[4 * j], y = freshSums[4 * j + 1], z = freshSums[4 * j + 2];
       const r0 = x - px, r1 = y - py, r2 = z - pz;
       px = x; py = y; pz = z;
-      const wing = this.wingsOf(i, w), k = v1 < va ? slot[v1] : -1;
+      const from = j === 0 ? 0 : ends[j - 1], to = ends[j], m = to - from;
       for (let a = 0; a < 3; a++) {
-        const p1 = q[3 * v1 + a];
-        const pred = wing ? q[3 * w[0] + a] + q[3 * w[1] + a] - p1 : k >= 0 ? 2 * start[3 * k + a] - p1 : p1;
+        let pred = q[3 * v1 + a];
+        if (m > 0) {
+          let sum = 0;
+          for (let k = from; k < to; k++) sum += q[3 * rings[k] + a];
+          pred = Math.floor((2 * sum + m) / (2 * m));
+        }
         const e = (pred + (a === 0 ? r0 : a === 1 ? r1 : r2)) & 0xffff;
         if (e > lim) throw new Error("position outside the grid");
         q[3 * v0 + a] = e;
@@ -784,6 +837,10 @@ export class StreamDecoder {
       const v1 = this.v1[i], v0 = this.header.baseVertices + i;
       this.deq(q, v1, this.p1, 3 * i);
       this.deq(q, v0, this.p0, 3 * i);
+      for (let a = 0; a < 3; a++) {
+        this.q1[3 * i + a] = q[3 * v1 + a];
+        this.q0[3 * i + a] = q[3 * v0 + a];
+      }
       for (let a = 0; a < 3; a++) {
         this.pm[3 * i + a] = c[3 * v1 + a];
         c[3 * v1 + a] = this.p1[3 * i + a];

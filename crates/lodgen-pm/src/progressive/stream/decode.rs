@@ -95,6 +95,10 @@ struct ChunkColumns<'a> {
     new: Vec<[u16; 3]>,
     wedges: Option<WedgeColumns>,
     errors: Vec<u32>,
+    /// Each record's `v0` ring once applied (flat, `ring_ends` per record).
+    rings: Vec<u32>,
+    ring_ends: Vec<usize>,
+    predicted: Vec<bool>,
 }
 
 fn read_columns<'a>(
@@ -132,6 +136,9 @@ fn read_columns<'a>(
         new: differences(&new),
         wedges,
         errors,
+        rings: Vec::new(),
+        ring_ends: Vec::with_capacity(n),
+        predicted: Vec::new(),
     })
 }
 
@@ -205,13 +212,38 @@ fn replay(
         st.topo.add_face(&mut st.mesh.triangles, f);
     }
     let held = st.topo.corners(&st.mesh.triangles, v1);
+    let explicit = match c.codes[i][3] {
+        0 => false,
+        1 => true,
+        x => return Err(invalid(at, format!("corner-edit flag {x}"))),
+    };
+    if !explicit {
+        let first = (st.mesh.triangles.len() - faces.len()) as u32;
+        let fan = &st.topo.fans[v1 as usize];
+        let ends = (v0, v1);
+        topo::predict_mask(
+            &st.mesh.triangles,
+            fan,
+            first,
+            &faces,
+            ends,
+            &held,
+            &mut c.predicted,
+        );
+    }
     let mut corners = Corners::new();
-    for &k in &held {
-        if c.mask.next()? {
+    for (j, &k) in held.iter().enumerate() {
+        if if explicit {
+            c.mask.next()?
+        } else {
+            c.predicted[j]
+        } {
             st.topo.move_corner(&mut st.mesh.triangles, k, v1, v0);
             corners.push(k);
         }
     }
+    c.rings.extend(st.topo.ring(&st.mesh.triangles, v0));
+    c.ring_ends.push(c.rings.len());
     let wedges = match (&h.wedges, &mut st.wedges, &mut c.wedges) {
         (Some(layout), Some(ws), Some(wc)) => {
             let first = st.mesh.triangles.len() - faces.len();
@@ -315,11 +347,10 @@ fn positions(
     for ((&v, s), r) in moved.iter().zip(&start).zip(&c.moved) {
         st.q[v as usize] = check([0, 1, 2].map(|k| s[k].wrapping_add(r[k])))?;
     }
-    for (s, r) in splits.iter().zip(&c.new) {
-        let slot = st.moved_slot[s.v1 as usize];
-        let v1_start = ((s.v1 as usize) < va).then(|| start[slot as usize - 1]);
-        let w = topo::wings(&s.faces, s.v0, s.v1);
-        let pred = topo::predict_new(&st.q, w, s.v1, v1_start);
+    let mut from = 0;
+    for ((s, r), &to) in splits.iter().zip(&c.new).zip(&c.ring_ends) {
+        let pred = topo::predict_new(&st.q, &c.rings[from..to], s.v1);
+        from = to;
         st.q.push(check([0, 1, 2].map(|k| pred[k].wrapping_add(r[k])))?);
     }
     for &v in &moved {

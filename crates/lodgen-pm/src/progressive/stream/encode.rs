@@ -230,6 +230,10 @@ struct TopoColumns {
     extra: Vec<u32>,
     mask: BitWriter,
     errors: Vec<u32>,
+    /// Each record's `v0` ring once applied (flat, `ring_ends` per record).
+    rings: Vec<u32>,
+    ring_ends: Vec<usize>,
+    predicted: Vec<bool>,
 }
 
 /// Replay record `i` on the topology and write its columns.
@@ -274,12 +278,30 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
         .map(|c| s.corners.binary_search(c).is_ok())
         .collect();
     debug_assert_eq!(edited.iter().filter(|&&e| e).count(), s.corners.len());
+    let first = (st.triangles.len() - nf) as u32;
+    let fan = &st.topo.fans[s.v1 as usize];
+    topo::predict_mask(
+        &st.triangles,
+        fan,
+        first,
+        &s.faces,
+        (v0, s.v1),
+        &held,
+        &mut cols.predicted,
+    );
+    if cols.predicted != edited {
+        cols.codes.last_mut().expect("pushed above")[3] = 1;
+        for &e in &edited {
+            cols.mask.push(e);
+        }
+    }
     for (c, &e) in held.iter().zip(&edited) {
-        cols.mask.push(e);
         if e {
             st.topo.move_corner(&mut st.triangles, *c, s.v1, v0);
         }
     }
+    cols.rings.extend(st.topo.ring(&st.triangles, v0));
+    cols.ring_ends.push(cols.rings.len());
     if let Some((log, w)) = &mut st.wedges {
         let sw = log.split(i, s);
         let first = st.triangles.len() - nf;
@@ -315,15 +337,13 @@ fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec
     let va = pm.base.positions.len() + a;
     let mut cols = TopoColumns::default();
     let mut moved: Vec<u32> = Vec::new();
-    let mut wings = Vec::with_capacity(b - a);
     for i in a..b {
         record(pm, i, st, &mut cols);
-        let (v0, v1) = ((va + i - a) as u32, pm.splits[i].v1);
+        let v1 = pm.splits[i].v1;
         if (v1 as usize) < va && st.moved_slot[v1 as usize] == 0 {
             moved.push(v1);
             st.moved_slot[v1 as usize] = moved.len() as u32;
         }
-        wings.push(topo::wings(&pm.splits[i].faces, v0, v1));
     }
     // positions at the chunk's end: the moved old vertices, then the new
     let start: Vec<[u16; 3]> = moved.iter().map(|&v| st.q[v as usize]).collect();
@@ -334,11 +354,10 @@ fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec
         st.q[v as usize] = q;
     }
     let mut new_res = Vec::with_capacity(b - a);
-    for (i, w) in (a..b).zip(wings) {
-        let v1 = pm.splits[i].v1;
-        let slot = st.moved_slot[v1 as usize];
-        let v1_start = ((v1 as usize) < va).then(|| start[slot as usize - 1]);
-        let pred = topo::predict_new(&st.q, w, v1, v1_start);
+    let mut from = 0;
+    for (i, &to) in (a..b).zip(&cols.ring_ends) {
+        let pred = topo::predict_new(&st.q, &cols.rings[from..to], pm.splits[i].v1);
+        from = to;
         let q = st.grid.quantize(st.positions[va + i - a]);
         new_res.push([0, 1, 2].map(|k| q[k].wrapping_sub(pred[k])));
         st.q.push(q);

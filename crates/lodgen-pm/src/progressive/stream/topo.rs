@@ -1,7 +1,8 @@
 //! The topology both sides of the stream keep while replaying splits: the
 //! triangle list and, per vertex, the triangles holding it. Faces of a split
-//! are coded against the split vertex's ring, corner edits as a bit mask
-//! over the corners it holds (after the new faces are appended).
+//! are coded against the split vertex's ring, corner edits predicted from
+//! the faces ([`predict_mask`]) or, where that misses, as a bit mask over
+//! the corners it holds (after the new faces are appended).
 
 use crate::progressive::Corner;
 
@@ -160,33 +161,86 @@ pub(super) fn wing_faces(faces: &[[u32; 3]], v0: u32, v1: u32) -> Option<(usize,
     (a != b).then_some((i, j))
 }
 
-/// The third vertices of the wing faces ([`wing_faces`]): the
-/// parallelogram predictor's wings.
-pub(super) fn wings(faces: &[[u32; 3]], v0: u32, v1: u32) -> Option<(u32, u32)> {
-    let third = |f: &[u32; 3]| f.iter().copied().find(|&c| c != v0 && c != v1);
-    let (i, j) = wing_faces(faces, v0, v1)?;
-    Some((third(&faces[i])?, third(&faces[j])?))
+/// The prediction of a new vertex's grid point at the end of its chunk:
+/// the centroid of its ring once its record is applied (`ring`: the
+/// vertices sharing a triangle with it then, all lower-numbered, their
+/// end-of-chunk points in `q`), each axis `⌊(2·Σ + n) / 2n⌋` (rounded half
+/// up); `v1`'s point when the ring is empty.
+pub(super) fn predict_new(q: &[[u16; 3]], ring: &[u32], v1: u32) -> [u16; 3] {
+    if ring.is_empty() {
+        return q[v1 as usize];
+    }
+    let n = ring.len() as u64;
+    let mut sum = [0u64; 3];
+    for &u in ring {
+        for (s, &c) in sum.iter_mut().zip(&q[u as usize]) {
+            *s += u64::from(c);
+        }
+    }
+    sum.map(|s| ((2 * s + n) / (2 * n)) as u16)
 }
 
-/// The prediction of a new vertex's grid point at the end of its chunk:
-/// the parallelogram `x_a + x_b − v1` of its wings when it has two, else
-/// `2 · start − end` of `v1` when `v1` existed at the chunk's start (the
-/// contraction put `v1` between the two), else `v1`'s point. `q` holds the
-/// end-of-chunk points of every vertex below the new one. Wrapping `u16`
-/// arithmetic: the residual is taken modulo 2^16.
-pub(super) fn predict_new(
-    q: &[[u16; 3]],
-    wings: Option<(u32, u32)>,
-    v1: u32,
-    v1_start: Option<[u16; 3]>,
-) -> [u16; 3] {
-    let p1 = q[v1 as usize];
-    match (wings, v1_start) {
-        (Some((a, b)), _) => {
-            let (a, b) = (q[a as usize], q[b as usize]);
-            [0, 1, 2].map(|i| a[i].wrapping_add(b[i]).wrapping_sub(p1[i]))
+/// The corner edits a split most likely makes, one flag per corner of
+/// `held` (the corners at `v1` once the split's faces are appended, as
+/// [`Topo::corners`] lists them): in an oriented manifold fan the new
+/// faces' wings `x` cut `v1`'s old triangles in two arcs, and `v0` takes
+/// the arc that starts at the old triangle whose edge with `x` runs the
+/// same way as the new face's edge `x → v0` (`v1 → x`; or `x → v1` for a
+/// face with `v0 → x`), spreading across edges `{v1, y}` with `y` no wing.
+/// `first`: the first new triangle. A guess, right on most splits; the
+/// stream codes the edits explicitly where it is wrong.
+pub(super) fn predict_mask(
+    triangles: &[[u32; 3]],
+    fan: &[u32],
+    first: u32,
+    faces: &[[u32; 3]],
+    (v0, v1): (u32, u32),
+    held: &[Corner],
+    out: &mut Vec<bool>,
+) {
+    let old: Vec<u32> = fan.iter().copied().filter(|&t| t < first).collect();
+    let mut taken = vec![false; old.len()];
+    let mut wings: Vec<u32> = Vec::with_capacity(2);
+    let mut queue: Vec<usize> = Vec::new();
+    for f in faces {
+        if !(f.contains(&v0) && f.contains(&v1)) {
+            continue;
         }
-        (None, Some(s)) => [0, 1, 2].map(|i| s[i].wrapping_mul(2).wrapping_sub(p1[i])),
-        (None, None) => p1,
+        let mut others = (0..3).filter(|&j| f[j] != v0 && f[j] != v1);
+        let (Some(ix), None) = (others.next(), others.next()) else {
+            continue;
+        };
+        let x = f[ix];
+        wings.push(x);
+        let (from, to) = if f[(ix + 1) % 3] == v0 {
+            (v1, x)
+        } else {
+            (x, v1)
+        };
+        for (k, &t) in old.iter().enumerate() {
+            let g = triangles[t as usize];
+            if !taken[k] && (0..3).any(|j| g[j] == from && g[(j + 1) % 3] == to) {
+                taken[k] = true;
+                queue.push(k);
+            }
+        }
     }
+    while let Some(k) = queue.pop() {
+        for y in triangles[old[k] as usize] {
+            if y == v1 || wings.contains(&y) {
+                continue;
+            }
+            for (m, &u) in old.iter().enumerate() {
+                if !taken[m] && triangles[u as usize].contains(&y) {
+                    taken[m] = true;
+                    queue.push(m);
+                }
+            }
+        }
+    }
+    out.clear();
+    out.extend(
+        held.iter()
+            .map(|c| old.binary_search(&c.triangle).is_ok_and(|k| taken[k])),
+    );
 }
