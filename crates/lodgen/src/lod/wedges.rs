@@ -8,14 +8,14 @@ use lodgen_pm::{simplify_with_wedges_metered, MeshError, Meter, Simplified, Simp
 
 use crate::scene::{Primitive, SourceMesh};
 
-use super::flat::{flatten, locate, Flat};
+use super::flat::{flatten, Flat};
 use super::options::AttributeWeights;
 use super::unit::normalize3;
 
-/// Bit pattern of every attribute of a flat vertex: equal keys, one wedge.
-fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
-    let p = &mesh.primitives[prim];
-    let mut k = vec![prim as u32];
+/// Appends the bit pattern of every attribute of vertex `v` of `p` to
+/// `k`: within a primitive, equal keys are one wedge (every key of a
+/// primitive has the same length: its attribute set).
+fn push_wedge_key(k: &mut Vec<u32>, p: &Primitive, v: usize) {
     let mut put = |xs: &[f32]| k.extend(xs.iter().map(|x| if *x == 0.0 { 0 } else { x.to_bits() }));
     put(&p.positions[v]);
     if let Some(a) = &p.normals {
@@ -55,7 +55,6 @@ fn wedge_key(mesh: &SourceMesh, prim: usize, v: usize) -> Vec<u32> {
     for a in &p.extra_joints {
         k.extend(a[v].map(u32::from));
     }
-    k
 }
 
 /// The weighted attribute vector of every flat vertex for the cost, and its
@@ -116,20 +115,27 @@ fn weighted_attributes(mesh: &SourceMesh, flat: &Flat, w: &AttributeWeights) -> 
 
 /// Flat vertex → its wedge's representative (the lowest flat vertex with
 /// the same primitive, position and attributes), so duplicated vertices
-/// with identical attributes do not make false seams.
+/// with identical attributes do not make false seams. Primitive by
+/// primitive (vertices of two primitives are never one wedge), their keys
+/// in one array: a key per vertex on the heap was ≈ 64 bytes per vertex,
+/// and its freed blocks stayed resident for the whole build.
 pub(super) fn wedge_of_vertex(mesh: &SourceMesh, flat: &Flat) -> Vec<u32> {
-    let n = flat.positions.len();
-    let mut keys: Vec<(Vec<u32>, u32)> = (0..n as u32)
-        .map(|v| {
-            let (p, local) = locate(flat, v);
-            (wedge_key(mesh, p, local), v)
-        })
-        .collect();
-    keys.sort_unstable();
-    let mut out = vec![0; n];
-    for run in keys.chunk_by(|a, b| a.0 == b.0) {
-        for k in run {
-            out[k.1 as usize] = run[0].1;
+    let mut out = vec![0; flat.positions.len()];
+    let mut keys = Vec::new();
+    for (p, &offset) in mesh.primitives.iter().zip(&flat.vertex_offset) {
+        let n = p.positions.len();
+        keys.clear();
+        for v in 0..n {
+            push_wedge_key(&mut keys, p, v);
+        }
+        let len = keys.len() / n.max(1);
+        let key = |v: u32| &keys[v as usize * len..(v as usize + 1) * len];
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_unstable_by(|&a, &b| key(a).cmp(key(b)).then(a.cmp(&b)));
+        for run in order.chunk_by(|&a, &b| key(a) == key(b)) {
+            for &v in run {
+                out[(offset + v) as usize] = offset + run[0];
+            }
         }
     }
     out
