@@ -438,6 +438,7 @@ impl Engine {
             &self.tri_alive,
             &self.log,
             None,
+            None,
         );
         self.stats.collapses = self.log.records.len();
         self.stats.output_triangles = self.live_tris;

@@ -182,6 +182,23 @@ impl Log {
             })
     }
 
+    /// Writes out the wedge edits left implied by one wedge per vertex
+    /// (`vw`, `Features::edits_implied`): `[vw[v0], vw[v1]]` for every
+    /// corner moved so far, the contraction in progress (`v0` into `v1`,
+    /// not yet in `records`) included but its last corner, whose edit the
+    /// caller pushes.
+    pub fn spell_out_wedges(&mut self, vw: &[u32], [v0, v1]: [u32; 2]) {
+        debug_assert!(self.wedges.is_empty());
+        self.wedges.reserve(self.corners.len());
+        for r in &self.records {
+            let e = [vw[r.v0 as usize], vw[r.v1 as usize]];
+            let n = (r.moved.end - r.moved.start) as usize;
+            self.wedges.extend(std::iter::repeat_n(e, n));
+        }
+        let e = [vw[v0 as usize], vw[v1 as usize]];
+        self.wedges.resize(self.corners.len() - 1, e);
+    }
+
     /// Remove the newest record and its corners.
     pub fn pop(&mut self) -> Option<Contraction> {
         let c = self.records.pop()?;
@@ -194,6 +211,8 @@ impl Log {
 
 impl ProgressiveMesh {
     /// Build from the simplifier's final state and log (collapse order).
+    /// `implied`: each vertex's one wedge when the log left every wedge
+    /// edit implied by it (`Features::edits_implied`).
     pub(crate) fn from_log(
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
@@ -201,6 +220,7 @@ impl ProgressiveMesh {
         triangle_alive: &[bool],
         log: &Log,
         wedges: Option<&[[u32; 3]]>,
+        implied: Option<&[u32]>,
     ) -> ProgressiveMesh {
         let records = &log.records;
         let Numbering {
@@ -243,8 +263,11 @@ impl ProgressiveMesh {
         };
         // one wedge per vertex (no seam, no attribute): the per-split
         // edits follow from it and are not stored (wedgelog.rs)
-        let per_vertex =
-            wedges.and_then(|w| one_wedge_per_vertex(triangles, w, log, vertex_alive.len()));
+        let per_vertex = match implied {
+            // what one_wedge_per_vertex finds from the written-out edits
+            Some(vw) if wedges.is_some() => Some(implied_per_vertex(vw, vertex_alive.len())),
+            _ => wedges.and_then(|w| one_wedge_per_vertex(triangles, w, log, vertex_alive.len())),
+        };
         let explicit = wedges.is_some() && per_vertex.is_none();
         let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if explicit {
             (0..n)
@@ -653,9 +676,55 @@ fn one_wedge_per_vertex(
     Some(of)
 }
 
+/// [`one_wedge_per_vertex`] when the log left every edit implied by one
+/// wedge per vertex (`vw`, `u32::MAX` for a vertex in no triangle): every
+/// corner agrees with it, and a vertex without any corner gets 0.
+fn implied_per_vertex(vw: &[u32], vertices: usize) -> Vec<u32> {
+    let mut of: Vec<u32> = vw
+        .iter()
+        .map(|&w| if w == u32::MAX { 0 } else { w })
+        .collect();
+    of.resize(vertices, 0);
+    of
+}
+
 /// The `[before, after]` wedges of `c`'s moved corners.
 fn moved_wedges<'a>(log: &'a Log, c: &Contraction) -> &'a [[u32; 2]] {
     log.wedges
         .get(c.moved.start as usize..c.moved.end as usize)
         .unwrap_or(&[])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn implied_wedge_edits_are_spelled_out_corner_by_corner() {
+        // two logged contractions (2 and 0 moved corners), then one in
+        // progress with 3 corners moved, the last one's edit left to the
+        // caller
+        let vw = [10, 11, 12, 13, 14];
+        let mut log = Log::with_capacity(4);
+        for (v0, v1, corners) in [(0u32, 1u32, 2u32), (2, 1, 0)] {
+            let mut c = log.begin(v0, v1, [0.0; 3], &[], 0.0);
+            for t in 0..corners {
+                log.push_corner(Corner {
+                    triangle: t,
+                    slot: 0,
+                });
+            }
+            c.moved.end = log.mark();
+            log.records.push(c);
+        }
+        for t in 0..3 {
+            log.push_corner(Corner {
+                triangle: t,
+                slot: 1,
+            });
+        }
+        log.spell_out_wedges(&vw, [3, 4]);
+        assert_eq!(log.wedges, [[10, 11], [10, 11], [13, 14], [13, 14]]);
+        assert_eq!(implied_per_vertex(&[5, u32::MAX, 7], 4), [5, 0, 7, 0]);
+    }
 }

@@ -94,7 +94,15 @@ impl Simplifier {
                     if let Some(w) = f.wedges.as_mut() {
                         w[t as usize][k] = e[1];
                     }
-                    self.log.wedges.push(e);
+                    match (&f.vertex_wedge, f.edits_implied) {
+                        (Some(vw), true) if e == [vw[v0 as usize], vw[v1 as usize]] => {}
+                        (Some(vw), true) => {
+                            self.log.spell_out_wedges(vw, [v0, v1]);
+                            f.edits_implied = false;
+                            self.log.wedges.push(e);
+                        }
+                        _ => self.log.wedges.push(e),
+                    }
                 }
             }
         }

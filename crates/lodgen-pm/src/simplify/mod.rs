@@ -285,6 +285,7 @@ impl Simplifier {
         self.add_features(&seams);
         if let Some(f) = &mut self.features {
             f.wedges = Some(wedges);
+            f.edits_implied = vertex_wedge.is_some();
             f.vertex_wedge = vertex_wedge;
         }
         self.rebuild_heap();
@@ -418,6 +419,10 @@ impl Simplifier {
             &self.tri_alive,
             &self.log,
             self.features.as_ref().and_then(|f| f.wedges.as_deref()),
+            self.features
+                .as_ref()
+                .filter(|f| f.edits_implied)
+                .and_then(|f| f.vertex_wedge.as_deref()),
         );
         self.stats.output_triangles = self.live_tris;
         self.stats.output_vertices = pm.base.positions.len();

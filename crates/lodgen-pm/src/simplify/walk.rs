@@ -206,7 +206,7 @@ impl Simplifier {
             }
         }
         if let Some(f) = &self.features {
-            for &x in &f.nbrs[v1 as usize] {
+            for &x in &f.nbrs[v1] {
                 self.mark[x as usize] = g;
             }
         }
