@@ -2,6 +2,8 @@
 //! [`LevelProblem`]s), computes missing normals, applies meshopt's vertex
 //! cache and fetch order, and the chain's dequantization box.
 
+use rayon::prelude::*;
+
 use crate::scene::{LodMesh, MorphTarget, Primitive, Scene};
 
 use super::error::{LevelProblem, WriteError};
@@ -68,6 +70,20 @@ pub(super) fn prepare_chains(
         if lod.levels.is_empty() {
             return Err(invalid("no levels".into()));
         }
+        // every level's primitives at once (vertex cache and fetch order,
+        // normals); the checks below then go in order, so the first
+        // problem is reported as before
+        let mut prepared: Vec<Vec<Result<Option<Prepared>, LevelProblem>>> = lod
+            .levels
+            .par_iter()
+            .map(|level| {
+                level
+                    .primitives
+                    .par_iter()
+                    .map(|p| prepare(p, material_count))
+                    .collect()
+            })
+            .collect();
         let mut levels = Vec::with_capacity(lod.levels.len());
         let mut coverages = Vec::with_capacity(lod.levels.len());
         for (k, level) in lod.levels.iter().enumerate() {
@@ -84,9 +100,9 @@ pub(super) fn prepare_chains(
             }
             coverages.push(value);
             let mut prims = Vec::with_capacity(level.primitives.len());
-            for (i, p) in level.primitives.iter().enumerate() {
-                if let Some(prepared) = prepare(p, material_count).map_err(|e| bad(i, e))? {
-                    prims.push(prepared);
+            for (i, p) in std::mem::take(&mut prepared[k]).into_iter().enumerate() {
+                if let Some(p) = p.map_err(|e| bad(i, e))? {
+                    prims.push(p);
                 }
             }
             if prims.is_empty() {
