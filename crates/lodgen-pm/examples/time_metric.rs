@@ -3,9 +3,9 @@
 //! CPU time, so figures survive a loaded machine), and prints every figure in full so two
 //! builds can be compared bit for bit.
 //!
-//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs] [bounded|dense]`
-//! (`bounded`: [`MeasureOptions::BOUNDED`], `dense`: METRO at 64 samples per triangle, instead of
-//! the default)
+//! `cargo run --release -p lodgen-pm --example time_metric [path/to/mesh.obj] [subdivisions] [runs] [bounded|dense|dense:N|metro]`
+//! (`bounded`: [`MeasureOptions::BOUNDED`], `dense`: METRO at 64 samples per triangle, `dense:N`
+//! at N, `metro`: [`MeasureOptions::METRO`], instead of the default)
 
 use std::time::Instant;
 
@@ -30,6 +30,13 @@ fn main() {
     let mopts = match args.get(4).map(String::as_str) {
         Some("bounded") => MeasureOptions::BOUNDED,
         Some("dense") => MeasureOptions::METRO.with_samples_per_triangle(64.0),
+        Some("metro") => MeasureOptions::METRO,
+        Some(d) if d.starts_with("floor:") => {
+            MeasureOptions::DEFAULT.with_min_samples(d[6..].parse().unwrap())
+        }
+        Some(d) if d.starts_with("dense:") => {
+            MeasureOptions::METRO.with_samples_per_triangle(d[6..].parse().unwrap())
+        }
         _ => MeasureOptions::DEFAULT,
     };
     let m = mesh_from_args(&args);

@@ -72,7 +72,8 @@ struct MeasureArgs {
     a: PathBuf,
     /// The mesh compared with it (B).
     b: PathBuf,
-    /// Area samples per triangle of the larger mesh (plus every vertex).
+    /// Area samples per triangle of the larger mesh, up to 2,048 triangles,
+    /// then N·√(2,048·t) (plus every vertex and a max-seeking search).
     #[arg(long, default_value_t = 2.0, value_name = "N")]
     samples: f64,
     /// Print JSON instead of a table.

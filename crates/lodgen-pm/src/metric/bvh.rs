@@ -372,6 +372,19 @@ impl TriangleBvh {
         p: [f64; 3],
         hint: Option<u32>,
     ) -> Option<(f64, u32, [f64; 3])> {
+        self.closest_slot_until(p, hint, -1.0)
+    }
+
+    /// Like [`Self::closest_slot`], but the search stops at the first triangle whose squared
+    /// distance is at most `stop` (then the answer is that triangle, not necessarily the
+    /// closest); an answer above `stop` is the exact closest.
+    #[inline]
+    fn closest_slot_until(
+        &self,
+        p: [f64; 3],
+        hint: Option<u32>,
+        stop: f64,
+    ) -> Option<(f64, u32, [f64; 3])> {
         if self.tris.is_empty() {
             return None;
         }
@@ -379,6 +392,9 @@ impl TriangleBvh {
         if let Some(h) = hint {
             debug_assert!((h as usize) < self.tris.len());
             self.test_leaf(p, h, 1, u32::MAX, &mut best);
+            if best.0 <= stop {
+                return Some(best);
+            }
         }
         // (the hint's leaf skips it: measured once)
         let skip = hint.unwrap_or(u32::MAX);
@@ -386,7 +402,7 @@ impl TriangleBvh {
             if self.root_count > 0 {
                 self.test_leaf(p, self.root_first, self.root_count, skip, &mut best);
             } else {
-                self.search(p, skip, &mut best);
+                self.search(p, skip, stop, &mut best);
             }
         }
         debug_assert!(
@@ -411,10 +427,11 @@ impl TriangleBvh {
     }
 
     /// The squared distance from `p` to the surface when it exceeds `floor` (a squared
-    /// distance), else `None`; with the slot of the answer, or of `hint` when that triangle
-    /// alone shows the distance to be at most `floor` (then nothing else is searched). For a
-    /// maximum over many points: the points nearer than the running maximum cost one triangle
-    /// test each. `None` also for an empty hierarchy.
+    /// distance), else `None`; with the slot of the answer, or of the first triangle found within
+    /// `floor` (`hint`'s first: then nothing else is searched). For a maximum over many points:
+    /// the points nearer than the running maximum cost one triangle test each when the previous
+    /// answer settles them, else a search that stops at the first triangle near enough.
+    /// `None` also for an empty hierarchy.
     #[inline]
     pub(crate) fn farther_than(
         &self,
@@ -422,21 +439,16 @@ impl TriangleBvh {
         floor: f64,
         hint: Option<u32>,
     ) -> (Option<f64>, Option<u32>) {
-        if let Some(h) = hint {
-            let [a, b, c] = self.tris[h as usize].map(widen);
-            if distance_squared(p, closest_point_on_triangle(p, a, b, c)) <= floor {
-                return (None, hint);
-            }
-        }
-        match self.closest_slot(p, hint) {
+        match self.closest_slot_until(p, hint, floor) {
             Some((d2, slot, _)) => ((d2 > floor).then_some(d2), Some(slot)),
             None => (None, None),
         }
     }
 
-    /// Depth-first branch and bound from internal node 0, nearer children first.
+    /// Depth-first branch and bound from internal node 0, nearer children first; stops at the
+    /// first triangle within squared distance `stop` (−1: never).
     #[inline]
-    fn search(&self, p: [f64; 3], skip: u32, best: &mut (f64, u32, [f64; 3])) {
+    fn search(&self, p: [f64; 3], skip: u32, stop: f64, best: &mut (f64, u32, [f64; 3])) {
         let p32 = p.map(|x| x as f32);
         let scale = p.iter().fold(self.magnitude, |m, &x| max64(m, x.abs()));
         let slack = SLACK * scale;
@@ -485,6 +497,9 @@ impl TriangleBvh {
                     let before = best.0;
                     self.test_leaf(p, node.first[c], u32::from(count), skip, best);
                     if best.0 < before {
+                        if best.0 <= stop {
+                            return;
+                        }
                         bound = skip_bound(best.0, slack);
                     }
                 }
@@ -615,8 +630,8 @@ fn split(slots: &mut [Item], cb: &Aabb) -> usize {
         2
     };
     if extent[axis] > 0.0 {
-        let lo = f64::from(cb.min[axis]);
-        let scale = BINS as f64 / extent[axis];
+        let lo = cb.min[axis];
+        let scale = (BINS as f64 / extent[axis]) as f32;
         let mut bin_box = [Aabb::EMPTY; BINS];
         let mut bin_n = [0usize; BINS];
         for it in slots.iter() {
@@ -679,8 +694,9 @@ fn median_split(slots: &mut [Item], cb: &Aabb) -> usize {
 }
 
 #[inline]
-fn bin_of(c: f32, lo: f64, scale: f64) -> usize {
-    (((f64::from(c) - lo) * scale) as usize).min(BINS - 1)
+fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
+    // (`as` saturates: a centre rounding below `lo` goes to bin 0)
+    (((c - lo) * scale) as usize).min(BINS - 1)
 }
 
 /// In-place partition: elements satisfying `left` first; returns how many did.

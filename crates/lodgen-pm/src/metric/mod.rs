@@ -4,9 +4,13 @@
 //! * `triangle.rs`: the exact point–triangle distance (pure geometry).
 //! * [`bvh`]: closest point on a triangle mesh (a 4-wide BVH with `f32` SIMD
 //!   box tests, exact `f64` answers); knows nothing about sampling.
-//! * [`measure`](mod@measure): surface sampling and the statistics, as a
-//!   fraction or percentage of the original's bounding-box diagonal;
-//!   [`Reference`] prepares an original once for measuring several levels.
+//! * `sampling.rs`: where the measured points come from (stratified area
+//!   samples, vertices, centroids, the max-seeking search) and the chunked,
+//!   in-order folds that measure them.
+//! * [`measure`](mod@measure): which points each direction measures and the
+//!   statistics, as a fraction or percentage of the original's bounding-box
+//!   diagonal; [`Reference`] prepares an original once for measuring several
+//!   levels.
 //!
 //! All take meshes as plain slices ([`MeshRef`], defined here so that
 //! none depends on another's types); the files depend on each other in
@@ -27,6 +31,7 @@ mod bounded;
 pub mod bvh;
 pub mod measure;
 mod options;
+mod sampling;
 mod triangle;
 
 pub use bvh::TriangleBvh;

@@ -142,12 +142,15 @@ pub struct BuildArgs {
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
 
-    /// Area samples per triangle for the error measurement (plus every
-    /// vertex).
+    /// Area samples per triangle of the larger mesh for the error
+    /// measurement, up to 2,048 triangles; above that the count grows with
+    /// the square root (N·√(2,048·t)). Every vertex, the centroids of a
+    /// coarse level and a search from the farthest points add to the
+    /// maximum.
     #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
     pub samples: f64,
 
-    /// Measure each level's error against the input (`on`: Metro sampling,
+    /// Measure each level's error against the input (`on`: Metro-style sampling,
     /// whose Hausdorff figure is a lower estimate), find the Hausdorff
     /// distance by bounded subdivision (`bounded`: certified within 1 % plus
     /// 10⁻⁵ of the diagonal; slower: the bunny run takes 4.5× the CPU), or skip it for
