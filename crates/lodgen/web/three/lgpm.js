@@ -405,6 +405,11 @@ export class StreamDecoder {
     this.scratch = new Uint32Array(64);
     this.ringBuf = [];
     this.movedOf = new Int32Array(h.totalVertices).fill(-1);
+    this.stamp = new Uint32Array(h.totalVertices); // record + 1 whose v0 ring holds the vertex
+    this.oldT = new Uint32Array(64); // predictMask scratch
+    this.queueT = new Uint32Array(64);
+    this.taken = new Uint8Array(64);
+    this.wingT = new Uint32Array(8);
     this.nt = h.baseTriangles;
     this.nv = nv;
     this.q = q;
@@ -706,8 +711,15 @@ export class StreamDecoder {
       this.moveCorner(c, v1, v0);
     }
     this.cStart[i + 1] = corners.n;
-    const around = this.ring(v0);
-    for (let k = 0; k < around.length; k++) topo.rings.push(around[k]);
+    // v0's ring (each vertex once; the centroid needs no order)
+    const stamp = this.stamp, mark = i + 1;
+    for (let c = this.head[v0]; c !== NONE; c = next[c]) {
+      const o = c - (c % 3);
+      for (let j = 0; j < 3; j++) {
+        const u = tri[o + j];
+        if (u !== v0 && stamp[u] !== mark) { stamp[u] = mark; topo.rings.push(u); }
+      }
+    }
     topo.ringEnd[i - topo.first] = topo.rings.n;
     if (wc) {
       const cw = this.cw, end = 3 * this.nt;
@@ -739,16 +751,20 @@ export class StreamDecoder {
   // edges {v1, y}, y no wing.
   predictMask(v0, v1, first) {
     const tri = this.tri, next = this.nextC;
-    const old = this.oldBuf || (this.oldBuf = []), wings = this.wingList || (this.wingList = []);
-    const queue = this.queueBuf || (this.queueBuf = []);
-    old.length = 0; wings.length = 0; queue.length = 0;
+    let no = 0;
     for (let c = this.head[v1]; c !== NONE; c = next[c]) {
       const t = (c / 3) | 0;
-      if (t < first && old[old.length - 1] !== t) old.push(t);
+      if (t >= first || (no > 0 && this.oldT[no - 1] === t)) continue;
+      if (no === this.oldT.length) {
+        const grow = (a) => { const b = new a.constructor(2 * a.length); b.set(a); return b; };
+        this.oldT = grow(this.oldT); this.queueT = grow(this.queueT); this.taken = grow(this.taken);
+      }
+      this.oldT[no++] = t;
     }
-    if (!this.taken || this.taken.length < old.length) this.taken = new Uint8Array(2 * old.length + 16);
-    const taken = this.taken;
-    taken.fill(0, 0, old.length);
+    if (this.wingT.length < this.nt - first) this.wingT = new Uint32Array(2 * (this.nt - first));
+    const old = this.oldT, queue = this.queueT, taken = this.taken, wings = this.wingT;
+    taken.fill(0, 0, no);
+    let nw = 0, nq = 0;
     for (let t = first; t < this.nt; t++) {
       const o = 3 * t, f0 = tri[o], f1 = tri[o + 1], f2 = tri[o + 2];
       if ((f0 !== v0 && f1 !== v0 && f2 !== v0) || (f0 !== v1 && f1 !== v1 && f2 !== v1)) continue;
@@ -756,25 +772,28 @@ export class StreamDecoder {
       for (let j = 0; j < 3; j++) if (tri[o + j] !== v0 && tri[o + j] !== v1) { m++; if (ix < 0) ix = j; }
       if (m !== 1) continue;
       const x = tri[o + ix];
-      wings.push(x);
+      wings[nw++] = x;
       const from = tri[o + ((ix + 1) % 3)] === v0 ? v1 : x, to = from === v1 ? x : v1;
-      for (let k = 0; k < old.length; k++) {
+      for (let k = 0; k < no; k++) {
         if (taken[k]) continue;
         const p = 3 * old[k];
         for (let j = 0; j < 3; j++) {
-          if (tri[p + j] === from && tri[p + ((j + 1) % 3)] === to) { taken[k] = 1; queue.push(k); break; }
+          if (tri[p + j] === from && tri[p + ((j + 1) % 3)] === to) { taken[k] = 1; queue[nq++] = k; break; }
         }
       }
     }
-    while (queue.length) {
-      const o = 3 * old[queue.pop()];
+    while (nq > 0) {
+      const o = 3 * old[queue[--nq]];
       for (let j = 0; j < 3; j++) {
         const y = tri[o + j];
-        if (y === v1 || wings.includes(y)) continue;
-        for (let m = 0; m < old.length; m++) {
+        if (y === v1) continue;
+        let wing = false;
+        for (let w = 0; w < nw; w++) if (wings[w] === y) wing = true;
+        if (wing) continue;
+        for (let m = 0; m < no; m++) {
           if (taken[m]) continue;
           const p = 3 * old[m];
-          if (tri[p] === y || tri[p + 1] === y || tri[p + 2] === y) { taken[m] = 1; queue.push(m); }
+          if (tri[p] === y || tri[p + 1] === y || tri[p + 2] === y) { taken[m] = 1; queue[nq++] = m; }
         }
       }
     }
