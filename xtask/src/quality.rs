@@ -24,7 +24,8 @@
 //! (`target/quality-peers.tsv`), only lodgen is run and measured and its
 //! ratios are against the recorded best peer. `--meshes a,b` runs a subset;
 //! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
-//! `Schedule::Greedy` instead of its default pass schedule.
+//! `Schedule::Greedy` instead of its default pass schedule; `--reach` with
+//! `SimplifyOptions::reach` on (`DEFAULT_REACH_FACTOR`).
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -133,6 +134,7 @@ struct Args {
     quick: bool,
     python: bool,
     greedy: bool,
+    reach: bool,
 }
 
 fn parse(args: &[String]) -> Result<Args> {
@@ -141,6 +143,7 @@ fn parse(args: &[String]) -> Result<Args> {
         quick: false,
         python: true,
         greedy: false,
+        reach: false,
     };
     let mut it = args.iter();
     let mut chosen = false;
@@ -157,8 +160,10 @@ fn parse(args: &[String]) -> Result<Args> {
             "--quick" => out.quick = true,
             "--no-peers" => out.python = false,
             "--greedy" => out.greedy = true,
+            "--reach" => out.reach = true,
             other => bail!(
-                "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy)"
+                "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
+                 --reach)"
             ),
         }
     }
@@ -187,9 +192,12 @@ fn input(assets: &Path, name: &str) -> Result<Mesh> {
 }
 
 /// lodgen's levels: one run to the smallest ratio, levels cut from the log.
-fn lodgen_levels(m: &Mesh, greedy: bool) -> Result<Vec<Mesh>> {
+fn lodgen_levels(m: &Mesh, greedy: bool, reach: bool) -> Result<Vec<Mesh>> {
     let n = m.triangles.len();
     let mut opts = SimplifyOptions::DEFAULT.with_target_ratio(RATIOS[RATIOS.len() - 1]);
+    if reach {
+        opts = opts.with_reach(Some(lodgen_pm::DEFAULT_REACH_FACTOR));
+    }
     if greedy {
         opts = opts.with_schedule(lodgen_pm::Schedule::Greedy);
     }
@@ -382,7 +390,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
-        let levels = lodgen_levels(&m, args.greedy)?;
+        let levels = lodgen_levels(&m, args.greedy, args.reach)?;
         let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
         let mut peers: Vec<Vec<Option<Mesh>>> = vec![vec![None; counts.len()]; PEERS.len()];
         if let Some((py, usable)) = &python {

@@ -55,7 +55,7 @@ pub use progressive::{
 pub use simplify::{
     Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
     SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT,
-    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
+    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
 };
 
 /// A simplification's result: the progressive mesh (numbered as in

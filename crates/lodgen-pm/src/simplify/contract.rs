@@ -16,6 +16,7 @@ impl Simplifier {
             p,
             error,
             removed,
+            ..
         } = plan;
         let (i0, i1) = (v0 as usize, v1 as usize);
         let merged = fv(p);

@@ -52,7 +52,7 @@ pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 pub use meter::{Meter, Stage};
 pub use options::{
     Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
-    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
+    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
 };
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
 
@@ -161,6 +161,9 @@ struct Plan {
     p: DVec3,
     error: f32,
     removed: SmallVec<[u32; 2]>,
+    /// Deferred to a later pass: it moves the surface too far
+    /// ([`SimplifyOptions::reach`]).
+    deferred: bool,
 }
 
 /// A candidate of a pass: 12 bytes (the pass list and its sort buffer are

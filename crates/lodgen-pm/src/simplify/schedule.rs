@@ -143,8 +143,10 @@ impl Simplifier {
                 continue;
             }
             let before = self.live_tris;
-            match self.try_contract(e.a, e.b) {
-                Ok(()) => {
+            match self.plan(e.a, e.b) {
+                Ok(plan) if plan.deferred => self.pass.deferred += 1,
+                Ok(plan) => {
+                    self.contract(plan);
                     let pass = &mut self.pass;
                     pass.touched[e.a as usize] = n;
                     pass.touched[e.b as usize] = n;
