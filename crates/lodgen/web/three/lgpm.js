@@ -403,11 +403,15 @@ export class StreamDecoder {
     this.p0 = new Float32Array(3 * ns);
     this.pm = new Float32Array(3 * ns);
     this.scratch = new Uint32Array(64);
-    this.ringBuf = [];
+    this.ringBuf = new Uint32Array(128); // ring(): 2 per corner at most
     this.movedOf = new Int32Array(h.totalVertices).fill(-1);
     this.stamp = new Uint32Array(h.totalVertices); // record + 1 whose v0 ring holds the vertex
-    this.oldT = new Uint32Array(64); // predictMask scratch
-    this.queueT = new Uint32Array(64);
+    this.oldT = new Uint32Array(64); // v1's old triangles, from ring()
+    this.oldK = new Uint32Array(64); // v1's old corners: their index in oldT
+    this.oldC = new Uint32Array(64); // v1's old corners, ascending
+    this.oldA = new Uint32Array(64); // per old triangle: the vertex after v1
+    this.oldB = new Uint32Array(64); // and the one before
+    this.queueT = new Uint32Array(64); // predictMask scratch
     this.taken = new Uint8Array(64);
     this.wingT = new Uint32Array(8);
     this.nt = h.baseTriangles;
@@ -459,30 +463,67 @@ export class StreamDecoder {
     this.tail[v] = c;
   }
 
-  // Corner c leaves vertex `from`'s list and joins `to`'s, in order.
-  moveCorner(c, from, to) {
+  // Corners cs[k0 .. k1] (ascending, all in `from`'s list) leave it and
+  // join `to`'s, in order: one pass over each list.
+  moveCorners(cs, k0, k1, from, to) {
+    if (k0 === k1) return;
     const next = this.nextC, head = this.head, tail = this.tail;
-    let p = NONE, x = head[from];
-    while (x !== c) { p = x; x = next[x]; }
-    if (p === NONE) head[from] = next[c];
-    else next[p] = next[c];
-    if (tail[from] === c) tail[from] = p;
+    let p = NONE, x = head[from], k = k0;
+    while (k < k1) {
+      const nx = next[x];
+      if (x === cs[k]) {
+        if (p === NONE) head[from] = nx;
+        else next[p] = nx;
+        if (tail[from] === x) tail[from] = p;
+        k++;
+      } else p = x;
+      x = nx;
+    }
     p = NONE;
     x = head[to];
-    while (x !== NONE && x < c) { p = x; x = next[x]; }
-    next[c] = x;
-    if (p === NONE) head[to] = c;
-    else next[p] = c;
-    if (x === NONE) tail[to] = c;
+    for (k = k0; k < k1; k++) {
+      const c = cs[k];
+      while (x !== NONE && x < c) { p = x; x = next[x]; }
+      next[c] = x;
+      if (p === NONE) head[to] = c;
+      else next[p] = c;
+      p = c;
+    }
+    if (x === NONE) tail[to] = p;
+  }
+
+  // Room for n old triangles / corners at v1 in the scratch arrays.
+  growOld(n) {
+    if (n < this.oldC.length) return;
+    const grow = (a) => { const b = new a.constructor(2 * n); b.set(a); return b; };
+    this.oldT = grow(this.oldT); this.oldK = grow(this.oldK); this.oldC = grow(this.oldC);
+    this.oldA = grow(this.oldA); this.oldB = grow(this.oldB);
+    const r = new Uint32Array(4 * n);
+    r.set(this.ringBuf);
+    this.ringBuf = r;
+    this.queueT = grow(this.queueT); this.taken = grow(this.taken);
   }
 
   // The vertices sharing a triangle with v, ascending, each once (a
-  // scratch array, valid until the next call).
+  // scratch array, its first this.ringN entries, valid until the next call). Also v's corners into
+  // oldC[0 .. this.nOldC], their triangles (each once) into
+  // oldT[0 .. this.nOldT] (oldA / oldB: the vertices after / before v's
+  // first corner there), oldK[j] = the index in oldT of corner j.
   ring(v) {
-    const r = this.ringBuf, tri = this.tri, next = this.nextC;
-    let n = 0;
+    const tri = this.tri, next = this.nextC;
+    let r = this.ringBuf;
+    let n = 0, nc = 0, nt = 0;
     for (let c = this.head[v]; c !== NONE; c = next[c]) {
-      const o = c - (c % 3);
+      const o = c - (c % 3), t = (o / 3) | 0;
+      if (nc === this.oldC.length) { this.growOld(nc); r = this.ringBuf; }
+      if (nt === 0 || this.oldT[nt - 1] !== t) {
+        const s = c - o;
+        this.oldA[nt] = tri[o + (s === 2 ? 0 : s + 1)];
+        this.oldB[nt] = tri[o + (s === 0 ? 2 : s - 1)];
+        this.oldT[nt++] = t;
+      }
+      this.oldK[nc] = nt - 1;
+      this.oldC[nc++] = c;
       for (let j = 0; j < 3; j++) {
         const u = tri[o + j];
         if (u === v) continue;
@@ -495,7 +536,9 @@ export class StreamDecoder {
         n++;
       }
     }
-    r.length = n;
+    this.ringN = n;
+    this.nOldC = nc;
+    this.nOldT = nt;
     return r;
   }
 
@@ -685,14 +728,15 @@ export class StreamDecoder {
         }
       } else {
         const p = c % 6, r = (c / 6) | 0;
-        if (r >= RING_CODES || r >= ring.length) throw new Error(`face code ${c} beyond the ring of ${v1}`);
+        if (r >= RING_CODES || r >= this.ringN) throw new Error(`face code ${c} beyond the ring of ${v1}`);
         const perm = PERMS[p];
         tri[o + perm[0]] = v0;
         tri[o + perm[1]] = v1;
         tri[o + perm[2]] = ring[r];
       }
     }
-    this.faces0.set(tri.subarray(3 * first, 3 * (first + nf)), 3 * first);
+    const faces0 = this.faces0;
+    for (let c = 3 * first, e = 3 * (first + nf); c < e; c++) faces0[c] = tri[c];
     this.nv++;
     this.nt += nf;
     for (let c = 3 * first; c < 3 * this.nt; c++) this.append(c);
@@ -705,11 +749,8 @@ export class StreamDecoder {
     if (flag === 1) {
       for (let c = this.head[v1]; c !== NONE; c = next[c]) if (mask.next()) corners.push(c);
     } else this.predictMask(v0, v1, first);
-    for (let k = c0; k < corners.n; k++) {
-      const c = corners.a[k];
-      tri[c] = v0;
-      this.moveCorner(c, v1, v0);
-    }
+    for (let k = c0; k < corners.n; k++) tri[corners.a[k]] = v0;
+    this.moveCorners(corners.a, c0, corners.n, v1, v0);
     this.cStart[i + 1] = corners.n;
     // v0's ring (each vertex once; the centroid needs no order)
     const stamp = this.stamp, mark = i + 1;
@@ -750,17 +791,9 @@ export class StreamDecoder {
   // with edge v1 -> x (x -> v1 when the face has v0 -> x), spreading across
   // edges {v1, y}, y no wing.
   predictMask(v0, v1, first) {
-    const tri = this.tri, next = this.nextC;
-    let no = 0;
-    for (let c = this.head[v1]; c !== NONE; c = next[c]) {
-      const t = (c / 3) | 0;
-      if (t >= first || (no > 0 && this.oldT[no - 1] === t)) continue;
-      if (no === this.oldT.length) {
-        const grow = (a) => { const b = new a.constructor(2 * a.length); b.set(a); return b; };
-        this.oldT = grow(this.oldT); this.queueT = grow(this.queueT); this.taken = grow(this.taken);
-      }
-      this.oldT[no++] = t;
-    }
+    // v1's old triangles and corners, as ring(v1) left them; v1 once in
+    // each (the usual case): its edges are v1 -> oldA, oldB -> v1
+    const tri = this.tri, no = this.nOldT, once = no === this.nOldC, oa = this.oldA, ob = this.oldB;
     if (this.wingT.length < this.nt - first) this.wingT = new Uint32Array(2 * (this.nt - first));
     const old = this.oldT, queue = this.queueT, taken = this.taken, wings = this.wingT;
     taken.fill(0, 0, no);
@@ -776,34 +809,33 @@ export class StreamDecoder {
       const from = tri[o + ((ix + 1) % 3)] === v0 ? v1 : x, to = from === v1 ? x : v1;
       for (let k = 0; k < no; k++) {
         if (taken[k]) continue;
+        if (once) {
+          if (from === v1 ? oa[k] === to : ob[k] === from) { taken[k] = 1; queue[nq++] = k; }
+          continue;
+        }
         const p = 3 * old[k];
         for (let j = 0; j < 3; j++) {
           if (tri[p + j] === from && tri[p + ((j + 1) % 3)] === to) { taken[k] = 1; queue[nq++] = k; break; }
         }
       }
     }
+    // across edges {v1, y}: the old triangles are the ones at v1, and
+    // oldA / oldB hold every other vertex of each
     while (nq > 0) {
-      const o = 3 * old[queue[--nq]];
-      for (let j = 0; j < 3; j++) {
-        const y = tri[o + j];
+      const k = queue[--nq];
+      for (let j = 0; j < 2; j++) {
+        const y = j === 0 ? oa[k] : ob[k];
         if (y === v1) continue;
         let wing = false;
         for (let w = 0; w < nw; w++) if (wings[w] === y) wing = true;
         if (wing) continue;
         for (let m = 0; m < no; m++) {
-          if (taken[m]) continue;
-          const p = 3 * old[m];
-          if (tri[p] === y || tri[p + 1] === y || tri[p + 2] === y) { taken[m] = 1; queue[nq++] = m; }
+          if (!taken[m] && (oa[m] === y || ob[m] === y)) { taken[m] = 1; queue[nq++] = m; }
         }
       }
     }
-    let k = 0;
-    for (let c = this.head[v1]; c !== NONE; c = next[c]) {
-      const t = (c / 3) | 0;
-      if (t >= first) continue;
-      while (old[k] !== t) k++;
-      if (taken[k]) this.corners.push(c);
-    }
+    const oc = this.oldC, ok = this.oldK, corners = this.corners;
+    for (let j = 0, n = this.nOldC; j < n; j++) if (taken[ok[j]]) corners.push(oc[j]);
   }
 
   // Grid points at the chunk's end for records first .. first + n, then
