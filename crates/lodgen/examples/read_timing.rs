@@ -63,12 +63,7 @@ fn main() -> Result<()> {
                 let (t, c) = (Instant::now(), cpu_seconds());
                 let scene = lodgen::io::read_scene(path.as_ref())?;
                 let read = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
-                let triangles: usize = scene
-                    .meshes
-                    .iter()
-                    .flat_map(|m| &m.primitives)
-                    .map(|p| p.triangle_count())
-                    .sum();
+                let triangles = scene.triangle_count();
                 drop(scene);
                 println!(
                     "floor {:.1} ms wall {:.1} ms CPU ({lines} lines)  read {:.1} ms wall {:.1} ms CPU ({triangles} triangles)",

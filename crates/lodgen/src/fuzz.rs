@@ -232,12 +232,7 @@ fn read_measure_build(dir: &Path, input: &Path) -> Result<String, String> {
         Ok(s) => s,
         Err(e) => return Ok(format!("read error: {e}")),
     };
-    let triangles: usize = scene
-        .meshes
-        .iter()
-        .flat_map(|m| &m.primitives)
-        .map(|p| p.triangle_count())
-        .sum();
+    let triangles = scene.triangle_count();
     if triangles > MAX_BUILD_TRIANGLES {
         return Ok(format!("read {triangles} triangles (not simplified)"));
     }

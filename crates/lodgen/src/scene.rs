@@ -23,6 +23,17 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
 }
 
+impl Scene {
+    /// Triangles of every primitive of every mesh.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes
+            .iter()
+            .flat_map(|m| &m.primitives)
+            .map(|p| p.triangle_count())
+            .sum()
+    }
+}
+
 /// Something left out or written differently from the input, and where:
 /// `at` names the place (`meshes[2].primitives[0] (mesh "door")`, a level,
 /// an animation), `message` what happened.

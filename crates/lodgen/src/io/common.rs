@@ -94,12 +94,7 @@ pub(super) fn parse_coords<'a, const N: usize>(
 
 /// Fails with [`ErrorKind::EmptyMesh`] when no mesh has a triangle.
 pub(super) fn check_not_empty(scene: &Scene, path: &Path) -> Result<(), ReadError> {
-    let triangles: usize = scene
-        .meshes
-        .iter()
-        .flat_map(|m| &m.primitives)
-        .map(|p| p.triangle_count())
-        .sum();
+    let triangles = scene.triangle_count();
     if triangles == 0 {
         return Err(ReadError::new(path, Location::File, ErrorKind::EmptyMesh));
     }
