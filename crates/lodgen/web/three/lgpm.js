@@ -254,6 +254,23 @@ class U32List {
   }
 }
 
+// Insert u into the ascending r[0 .. n] unless there; returns the new length.
+function insertSorted(r, n, u) {
+  let k = n;
+  while (k > 0 && r[k - 1] > u) k--;
+  if (k > 0 && r[k - 1] === u) return n;
+  for (let m = n; m > k; m--) r[m] = r[m - 1];
+  r[k] = u;
+  return n + 1;
+}
+
+// Push u on the list unless it is among its entries from r0 on.
+function ringPush(list, r0, u) {
+  const a = list.a;
+  for (let m = r0; m < list.n; m++) if (a[m] === u) return;
+  list.push(u);
+}
+
 // Whether `b[0..have]` holds the first `n` columns whole.
 function columnsIn(b, have, n) {
   let pos = 0;
@@ -405,7 +422,6 @@ export class StreamDecoder {
     this.scratch = new Uint32Array(64);
     this.ringBuf = new Uint32Array(128); // ring(): 2 per corner at most
     this.movedOf = new Int32Array(h.totalVertices).fill(-1);
-    this.stamp = new Uint32Array(h.totalVertices); // record + 1 whose v0 ring holds the vertex
     this.oldT = new Uint32Array(64); // v1's old triangles, from ring()
     this.oldK = new Uint32Array(64); // v1's old corners: their index in oldT
     this.oldC = new Uint32Array(64); // v1's old corners, ascending
@@ -511,30 +527,27 @@ export class StreamDecoder {
   // first corner there), oldK[j] = the index in oldT of corner j.
   ring(v) {
     const tri = this.tri, next = this.nextC;
-    let r = this.ringBuf;
-    let n = 0, nc = 0, nt = 0;
+    let r = this.ringBuf, oldA = this.oldA, oldB = this.oldB, oldT = this.oldT, oldK = this.oldK, oldC = this.oldC;
+    let n = 0, nc = 0, nt = 0, last = -1;
     for (let c = this.head[v]; c !== NONE; c = next[c]) {
-      const o = c - (c % 3), t = (o / 3) | 0;
-      if (nc === this.oldC.length) { this.growOld(nc); r = this.ringBuf; }
-      if (nt === 0 || this.oldT[nt - 1] !== t) {
-        const s = c - o;
-        this.oldA[nt] = tri[o + (s === 2 ? 0 : s + 1)];
-        this.oldB[nt] = tri[o + (s === 0 ? 2 : s - 1)];
-        this.oldT[nt++] = t;
+      const s = c % 3, o = c - s, t = (o / 3) | 0;
+      if (nc === oldC.length) {
+        this.growOld(nc);
+        r = this.ringBuf; oldA = this.oldA; oldB = this.oldB; oldT = this.oldT; oldK = this.oldK; oldC = this.oldC;
       }
-      this.oldK[nc] = nt - 1;
-      this.oldC[nc++] = c;
-      for (let j = 0; j < 3; j++) {
-        const u = tri[o + j];
-        if (u === v) continue;
-        // insertion into the sorted prefix, skipping repeats
-        let k = n;
-        while (k > 0 && r[k - 1] > u) k--;
-        if (k > 0 && r[k - 1] === u) continue;
-        for (let m = n; m > k; m--) r[m] = r[m - 1];
-        r[k] = u;
-        n++;
+      if (t !== last) {
+        // a triangle's other vertices are the ones after / before v's
+        // first corner there (v itself again when it holds v twice)
+        last = t;
+        const x = tri[o + (s === 2 ? 0 : s + 1)], y = tri[o + (s === 0 ? 2 : s - 1)];
+        oldA[nt] = x;
+        oldB[nt] = y;
+        oldT[nt++] = t;
+        if (x !== v) n = insertSorted(r, n, x);
+        if (y !== v) n = insertSorted(r, n, y);
       }
+      oldK[nc] = nt - 1;
+      oldC[nc++] = c;
     }
     this.ringN = n;
     this.nOldC = nc;
@@ -753,12 +766,28 @@ export class StreamDecoder {
     this.moveCorners(corners.a, c0, corners.n, v1, v0);
     this.cStart[i + 1] = corners.n;
     // v0's ring (each vertex once; the centroid needs no order)
-    const stamp = this.stamp, mark = i + 1;
-    for (let c = this.head[v0]; c !== NONE; c = next[c]) {
-      const o = c - (c % 3);
-      for (let j = 0; j < 3; j++) {
-        const u = tri[o + j];
-        if (u !== v0 && stamp[u] !== mark) { stamp[u] = mark; topo.rings.push(u); }
+    const rings = topo.rings, r0 = rings.n;
+    if (flag === 0 && this.nOldT === this.nOldC) {
+      // predicted, v1 once in each old triangle: v0's triangles are the
+      // taken old ones (their other vertices oldA / oldB) and the new
+      // faces holding v0
+      const taken = this.taken, oa = this.oldA, ob = this.oldB;
+      for (let k = 0, n = this.nOldT; k < n; k++) {
+        if (!taken[k]) continue;
+        ringPush(rings, r0, oa[k]);
+        ringPush(rings, r0, ob[k]);
+      }
+      for (let c = 3 * first, e = 3 * this.nt; c < e; c += 3) {
+        const x = tri[c], y = tri[c + 1], z = tri[c + 2];
+        if (x !== v0 && y !== v0 && z !== v0) continue;
+        if (x !== v0) ringPush(rings, r0, x);
+        if (y !== v0) ringPush(rings, r0, y);
+        if (z !== v0) ringPush(rings, r0, z);
+      }
+    } else {
+      for (let c = this.head[v0]; c !== NONE; c = next[c]) {
+        const o = c - (c % 3);
+        for (let j = 0; j < 3; j++) if (tri[o + j] !== v0) ringPush(rings, r0, tri[o + j]);
       }
     }
     topo.ringEnd[i - topo.first] = topo.rings.n;
@@ -822,16 +851,18 @@ export class StreamDecoder {
     // across edges {v1, y}: the old triangles are the ones at v1, and
     // oldA / oldB hold every other vertex of each
     while (nq > 0) {
-      const k = queue[--nq];
-      for (let j = 0; j < 2; j++) {
-        const y = j === 0 ? oa[k] : ob[k];
-        if (y === v1) continue;
-        let wing = false;
-        for (let w = 0; w < nw; w++) if (wings[w] === y) wing = true;
-        if (wing) continue;
-        for (let m = 0; m < no; m++) {
-          if (!taken[m] && (oa[m] === y || ob[m] === y)) { taken[m] = 1; queue[nq++] = m; }
-        }
+      const k = queue[--nq], ya = oa[k], yb = ob[k];
+      let sa = ya !== v1, sb = yb !== v1;
+      for (let w = 0; w < nw; w++) {
+        if (wings[w] === ya) sa = false;
+        if (wings[w] === yb) sb = false;
+      }
+      if (!sa && !sb) continue;
+      // one pass for both edges (the taken set is their closure: order is free)
+      for (let m = 0; m < no; m++) {
+        if (taken[m]) continue;
+        const a = oa[m], b = ob[m];
+        if ((sa && (a === ya || b === ya)) || (sb && (a === yb || b === yb))) { taken[m] = 1; queue[nq++] = m; }
       }
     }
     const oc = this.oldC, ok = this.oldK, corners = this.corners;
@@ -869,17 +900,20 @@ export class StreamDecoder {
       const r0 = x - px, r1 = y - py, r2 = z - pz;
       px = x; py = y; pz = z;
       const from = j === 0 ? 0 : ends[j - 1], to = ends[j], m = to - from;
-      for (let a = 0; a < 3; a++) {
-        let pred = q[3 * v1 + a];
-        if (m > 0) {
-          let sum = 0;
-          for (let k = from; k < to; k++) sum += q[3 * rings[k] + a];
-          pred = Math.floor((2 * sum + m) / (2 * m));
+      let s0 = q[3 * v1], s1 = q[3 * v1 + 1], s2 = q[3 * v1 + 2];
+      if (m > 0) {
+        let t0 = 0, t1 = 0, t2 = 0;
+        for (let k = from; k < to; k++) {
+          const u = 3 * rings[k];
+          t0 += q[u]; t1 += q[u + 1]; t2 += q[u + 2];
         }
-        const e = (pred + (a === 0 ? r0 : a === 1 ? r1 : r2)) & 0xffff;
-        if (e > lim) throw new Error("position outside the grid");
-        q[3 * v0 + a] = e;
+        s0 = Math.floor((2 * t0 + m) / (2 * m));
+        s1 = Math.floor((2 * t1 + m) / (2 * m));
+        s2 = Math.floor((2 * t2 + m) / (2 * m));
       }
+      const e0 = (s0 + r0) & 0xffff, e1 = (s1 + r1) & 0xffff, e2 = (s2 + r2) & 0xffff;
+      if (e0 > lim || e1 > lim || e2 > lim) throw new Error("position outside the grid");
+      q[3 * v0] = e0; q[3 * v0 + 1] = e1; q[3 * v0 + 2] = e2;
     }
     for (const v of moved) slot[v] = -1;
     // replay positions in order: p_merged is the position before the split
