@@ -162,6 +162,12 @@ impl Buckets {
         use rayon::prelude::*;
         let n: usize = parts.iter().map(Vec::len).sum();
         out.clear();
+        if out.capacity() / 2 > n {
+            // a later pass's list is a fraction of the first's: give the
+            // first's back (it stayed resident to the end of the run: 80 MB
+            // of the 4.4M-triangle scan's peak)
+            *out = Vec::with_capacity(n);
+        }
         let Some(&first) = parts.iter().find_map(|p| p.first()) else {
             return Buckets::default();
         };
