@@ -29,7 +29,7 @@ impl Simplifier {
                 &self.tri_alive,
                 &removed,
             );
-            (e, f.wedges.is_some())
+            (e, f.tracked())
         });
         let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error);
         for &t in &record.removed {
@@ -92,9 +92,7 @@ impl Simplifier {
                         _ => edits.iter().find(|e| e.0 == t).map_or([0; 2], |e| e.1),
                     };
                     next += 1;
-                    if let Some(w) = f.wedges.as_mut() {
-                        w[t as usize][k] = e[1];
-                    }
+                    f.set_corner_wedge(&self.tris, t, k, e[1]);
                     match (&f.vertex_wedge, f.edits_implied) {
                         (Some(vw), true) if e == [vw[v0 as usize], vw[v1 as usize]] => {}
                         (Some(vw), true) => {

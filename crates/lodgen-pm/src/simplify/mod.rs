@@ -286,8 +286,12 @@ impl Simplifier {
             None => Features::seams(&self.tris, &wedges),
         };
         self.add_features(&seams);
+        // one wedge per vertex and no attribute term (which reads corner
+        // wedges): the corners' wedges follow from the vertices'
+        let implied = vertex_wedge.is_some() && self.attributes.is_none();
         if let Some(f) = &mut self.features {
-            f.wedges = Some(wedges);
+            f.wedges = (!implied).then_some(wedges);
+            f.corners_implied = implied;
             f.edits_implied = vertex_wedge.is_some();
             f.vertex_wedge = vertex_wedge;
         }
@@ -301,6 +305,9 @@ impl Simplifier {
     /// Call before the first `step`. Panics if a wedge (vertex) has no
     /// values (a programming error, not input).
     pub fn set_attributes(&mut self, values: Vec<f32>, dims: usize) {
+        if let Some(f) = &mut self.features {
+            f.store_wedges(&self.tris);
+        }
         let wedges = self.features.as_ref().and_then(|f| f.wedges.as_deref());
         let diagonal = Mesh {
             positions: self.pos.clone(),
@@ -415,6 +422,10 @@ impl Simplifier {
         self.version = Vec::new();
         self.attributes = None;
         self.cost_scale = None;
+        // (the per-corner array, now that the quadrics are freed)
+        if let Some(f) = &mut self.features {
+            f.store_wedges(&self.tris);
+        }
         let pm = ProgressiveMesh::from_log(
             &self.pos,
             &self.tris,
