@@ -407,6 +407,7 @@ impl BuildArgs {
             min_triangles: self.min_triangles,
             meter: None,
             keep_progressive: true,
+            keep_input: true,
         })
     }
 

@@ -65,6 +65,9 @@ pub fn build_file_metered(
     // the progressive mesh is written with --progressive only; else it is
     // freed before the error measurement (peak memory)
     opts.keep_progressive = args.progressive;
+    // likewise each simplified mesh's input positions and indices, which
+    // nothing but the stream reads once the levels are extracted
+    opts.keep_input = args.progressive;
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }
@@ -73,12 +76,12 @@ pub fn build_file_metered(
     let read_opts = io::ReadOptions {
         strict: args.strict,
     };
-    let scene = io::read_scene_with(input, &read_opts)
+    let mut scene = io::read_scene_with(input, &read_opts)
         .with_context(|| format!("reading {}", input.display()))?;
     let read = t_read.elapsed();
     let mut warnings = scene.warnings.clone();
     let t_build = Instant::now();
-    let (builds, lods) = build_isolated(&scene, &opts, args.strict, &mut warnings, on_progress)
+    let (builds, lods) = build_isolated(&mut scene, &opts, args.strict, &mut warnings, on_progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
     let build = t_build.elapsed();
     if args.progressive {
@@ -121,7 +124,7 @@ pub fn build_file_metered(
 /// The builds and every chain to write: with `strict` the first mesh that
 /// fails fails the file; else it is kept unsimplified, with a warning.
 fn build_isolated(
-    scene: &Scene,
+    scene: &mut Scene,
     opts: &lod::BuildOptions,
     strict: bool,
     warnings: &mut Vec<Warning>,

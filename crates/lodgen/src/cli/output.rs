@@ -10,7 +10,6 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use crate::lod::MeshBuild;
-use crate::scene::Scene;
 use crate::summary;
 
 use super::args::{default_output, BuildArgs};
@@ -20,13 +19,7 @@ use super::progress::Spinner;
 impl BuiltFile {
     /// The JSON `--report` of this file.
     pub fn report_json(&self, input: &Path) -> serde_json::Value {
-        let mut report = report_json(
-            input,
-            &self.output,
-            &self.scene,
-            &self.builds,
-            &self.level_bytes,
-        );
+        let mut report = report_json(input, &self.output, &self.builds, &self.level_bytes);
         summary::extend_report(&mut report, self);
         let warnings: Vec<String> = self.warnings.iter().map(|w| w.to_string()).collect();
         report["warnings"] = warnings.into();
@@ -180,7 +173,6 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
 fn report_json(
     input: &Path,
     output: &Path,
-    scene: &Scene,
     builds: &[MeshBuild],
     bytes: &[Vec<u64>],
 ) -> serde_json::Value {
@@ -190,7 +182,7 @@ fn report_json(
         "meshes": builds.iter().enumerate().map(|(i, b)| json!({
             "name": b.lod.name,
             "source_mesh": b.lod.source,
-            "input_triangles": scene.meshes[b.lod.source].primitives.iter().map(|p| p.triangle_count()).sum::<usize>(),
+            "input_triangles": b.input_triangles,
             "welded_triangles": b.simplified.stats.input_triangles,
             "measured": b.measured,
             "stop": format!("{:?}", b.simplified.stop),

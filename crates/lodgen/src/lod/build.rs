@@ -2,9 +2,10 @@
 //! curvature-adaptive method) → select the levels → per level measure, fit
 //! and extract → screen coverages. [`MeshBuild`] is what comes out.
 
+use std::borrow::Cow;
 use std::time::Instant;
 
-use lodgen_pm::metric::{ErrorReport, MeasureOptions};
+use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef};
 use lodgen_pm::{
     levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
     SimplifyOptions,
@@ -25,6 +26,8 @@ use super::wedges::simplify_wedged;
 #[derive(Clone, Debug)]
 pub struct MeshBuild {
     pub lod: LodMesh,
+    /// Triangles of the input mesh (all primitives, before welding).
+    pub input_triangles: usize,
     /// The simplification (progressive mesh, stats, stop reason); its
     /// progressive mesh and maps are empty unless
     /// [`BuildOptions::keep_progressive`].
@@ -102,19 +105,28 @@ impl SceneBuild {
 /// degenerate, a simplification or measurement error) is kept unsimplified
 /// as a one-level chain with a warning naming it, instead of failing the
 /// scene. Errors that are not about one mesh (no levels requested) fail.
+/// Without [`BuildOptions::keep_input`], a simplified mesh's input
+/// positions and indices are freed in `scene` (its levels are extracted
+/// and their measurement cannot fail then: a mesh kept unsimplified keeps
+/// them).
 pub fn build_lods_isolated(
-    scene: &Scene,
+    scene: &mut Scene,
     opts: &BuildOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<SceneBuild, BuildError> {
     let n = scene.meshes.len();
     let mut out = SceneBuild::default();
-    for (i, m) in scene.meshes.iter().enumerate() {
-        if m.primitives.is_empty() {
+    for i in 0..n {
+        if scene.meshes[i].primitives.is_empty() {
             continue;
         }
         progress(Progress::Simplifying { mesh: i, of: n });
-        match build_one(i, m, opts, progress) {
+        // owned while it is built, so that its input can be freed
+        let mut mesh = Cow::Owned(std::mem::take(&mut scene.meshes[i]));
+        let built = build_mesh(i, &mut mesh, opts, progress);
+        scene.meshes[i] = mesh.into_owned();
+        let m = &scene.meshes[i];
+        match built {
             Ok(b) => out.builds.push(b),
             Err(BuildError::NoLevels) => return Err(BuildError::NoLevels),
             Err(e) => {
@@ -146,10 +158,23 @@ pub fn build_one(
     opts: &BuildOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<MeshBuild, BuildError> {
+    build_mesh(index, &mut Cow::Borrowed(mesh), opts, progress)
+}
+
+/// [`build_one`]; an owned `mesh` has its input positions and indices
+/// freed once they are no longer read, unless [`BuildOptions::keep_input`].
+fn build_mesh(
+    index: usize,
+    mesh: &mut Cow<'_, SourceMesh>,
+    opts: &BuildOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<MeshBuild, BuildError> {
+    let name = mesh.name.clone();
     let flat = flatten(mesh);
+    let input_triangles = flat.indices.len() / 3;
     let mesh_err = |source| BuildError::Mesh {
         index,
-        name: mesh.name.clone(),
+        name: name.clone(),
         source,
     };
     let sopts = simplify_options(opts, flat.indices.len() / 3)?;
@@ -158,7 +183,7 @@ pub fn build_one(
     let simplify_time = t_build.elapsed();
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
-    let measurer = Measurer::new(pm, &full, opts.measured, index, &mesh.name);
+    let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
     let mut measuring = |level: usize, of: usize| {
         progress(Progress::Measuring {
             mesh: index,
@@ -168,6 +193,15 @@ pub fn build_one(
     };
     let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
     let extracted = extract_levels(mesh, &flat, &simplified, &splits, opts.measured);
+    drop(flat);
+    if let (false, Cow::Owned(m)) = (opts.keep_input, &mut *mesh) {
+        if measurable(&full, &extracted) {
+            for p in &mut m.primitives {
+                p.positions = Vec::new();
+                p.indices = Vec::new();
+            }
+        }
+    }
     if !opts.keep_progressive {
         // the levels are out: the sequence is not needed while the
         // original's hierarchy is built and the levels measured
@@ -188,9 +222,10 @@ pub fn build_one(
     Ok(MeshBuild {
         lod: LodMesh {
             source: index,
-            name: mesh.name.clone(),
+            name,
             levels: lod_levels,
         },
+        input_triangles,
         simplified,
         level_splits: splits,
         errors,
@@ -294,6 +329,13 @@ fn extract_levels(
         });
     }
     out
+}
+
+/// Whether measuring the levels cannot fail: the original and every level
+/// to measure pass the check the measurement makes ([`MeshRef::validate`]).
+fn measurable(full: &Mesh, extracted: &[Extracted]) -> bool {
+    let ok = |m: &Mesh| MeshRef::new(&m.positions, &m.triangles).validate().is_ok();
+    ok(full) && extracted.iter().filter_map(|e| e.mesh.as_ref()).all(ok)
 }
 
 /// Every extracted level measured (its mesh freed once it is), then the
