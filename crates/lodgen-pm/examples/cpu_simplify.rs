@@ -8,6 +8,8 @@
 //! `plain` is `simplify` (position only, what `xtask bench` times);
 //! `wedges` is `simplify_with_wedges` with every vertex its own wedge and
 //! no attributes (what the CLI and the Python module run on a scan).
+//! The environment variable `REACH=F` sets `SimplifyOptions::reach` to
+//! `Some(F)`.
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
@@ -44,7 +46,12 @@ fn main() {
     let partition = args.get(6).map(|s| s.parse::<usize>().unwrap());
     let opts = SimplifyOptions::DEFAULT
         .with_target_ratio(ratio)
-        .with_partition(partition);
+        .with_partition(partition)
+        .with_reach(
+            std::env::var("REACH")
+                .ok()
+                .map(|s| s.parse().expect("REACH: a number")),
+        );
     let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     let mut digest = 0;
     let mut last = None;

@@ -43,6 +43,7 @@ pub(crate) mod pairs;
 mod partition;
 mod plan;
 pub(crate) mod quadric;
+mod reach;
 mod schedule;
 mod setup;
 pub(crate) mod stats;

@@ -6,7 +6,6 @@
 use super::legality::{link, moved_faces_ok, Faces, Link};
 use super::{dv, Plan, Rejected, Simplifier};
 use crate::mesh::adjacency::FanLookup;
-use crate::metric::bvh::{closest_point_on_triangle, distance_squared};
 use crate::util::prefetch;
 use glam::DVec3;
 use smallvec::SmallVec;
@@ -57,58 +56,6 @@ impl Simplifier {
             removed,
             deferred,
         })
-    }
-
-    /// Whether contracting `v0` and `v1` to `p` moves the surface farther
-    /// than `limit` (squared; see `SimplifyOptions::reach`): the old position of
-    /// `v0` or `v1` from every face it moves (with the two deleted ones
-    /// left out), or `p` from every face of the two old fans. Reads the
-    /// closed one-rings only.
-    fn reach_over(&self, v0: u32, v1: u32, p: DVec3, limit: f64) -> bool {
-        // the live faces of the two fans, as they are (`moved` false) or
-        // with `v0` and `v1` at `p` (then without the two faces the
-        // contraction deletes)
-        let faces = |moved: bool| {
-            [v0, v1].into_iter().flat_map(move |v| {
-                self.vtris.fan(v).iter().filter_map(move |&t| {
-                    let tri = self.tris[t as usize];
-                    let deleted = tri.contains(&v0) && tri.contains(&v1);
-                    (self.tri_alive[t as usize] && !(moved && deleted)).then(|| {
-                        tri.map(|x| {
-                            if moved && (x == v0 || x == v1) {
-                                p
-                            } else {
-                                dv(self.pos[x as usize])
-                            }
-                        })
-                    })
-                })
-            })
-        };
-        // whether `q` lies within the limit of one of the faces: first the
-        // cheap test (over the face, its plane near enough: the usual
-        // case), then the exact distance to the faces whose plane is near
-        let near = |q: DVec3, moved: bool| {
-            let over = |[a, b, c]: [DVec3; 3]| {
-                let n = (b - a).cross(c - a);
-                let s = n.dot(q - a);
-                s * s <= limit * n.length_squared()
-                    && (b - a).cross(q - a).dot(n) >= 0.0
-                    && (c - b).cross(q - b).dot(n) >= 0.0
-                    && (a - c).cross(q - c).dot(n) >= 0.0
-            };
-            faces(moved).any(over)
-                || faces(moved).any(|[a, b, c]| {
-                    let w = |v: DVec3| [v.x, v.y, v.z];
-                    let (q, a, b, c) = (w(q), w(a), w(b), w(c));
-                    distance_squared(q, closest_point_on_triangle(q, a, b, c)) <= limit
-                })
-        };
-        let old_far = [v0, v1].iter().any(|&v| {
-            let q = dv(self.pos[v as usize]);
-            (q - p).length_squared() > limit && !near(q, true)
-        });
-        old_far || !near(p, false)
     }
 
     /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
