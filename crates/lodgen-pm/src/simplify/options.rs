@@ -122,8 +122,9 @@ pub struct SimplifyOptions {
     /// Default value: `None` (opt in with `Some(DEFAULT_REACH_FACTOR)`):
     /// it lowers the error against the other simplifiers (`cargo xtask
     /// quality --quick --reach`: geometric mean of lodgen / best peer,
-    /// Hausdorff 1.172 → 1.012, RMS 1.055 → 1.032) but costs ~30 % more
-    /// CPU on the bunny (12 passes instead of 9).
+    /// Hausdorff 1.172 → 1.012, RMS 1.055 → 1.032) but costs ~20 % more
+    /// CPU on the bunny (the reach test of every planned pair, and one
+    /// more pass), and raises three cells (docs/quality.md).
     pub reach: Option<f64>,
 }
 
