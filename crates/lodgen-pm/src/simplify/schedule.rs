@@ -177,6 +177,10 @@ impl Simplifier {
         // where they are read anyway, not by a pass over all triangles).
         // (The fans `new` builds are compact: the first pass never does.)
         let compact = self.vtris.half_dead();
+        // the last pass's list is not read again: freed before this pass's
+        // parts are made (peak memory: the two were the second pass's
+        // peak), `Buckets::scatter` allocates the new one at its size
+        self.pass.queue = Vec::new();
         const CHUNK: usize = 2048;
         let nv = self.pos.len();
         let this = &*self;
