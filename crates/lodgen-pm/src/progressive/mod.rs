@@ -211,8 +211,10 @@ impl Log {
 
 impl ProgressiveMesh {
     /// Build from the simplifier's final state and log (collapse order).
-    /// `implied`: each vertex's one wedge when the log left every wedge
-    /// edit implied by it (`Features::edits_implied`).
+    /// `wedges`: every corner's wedge, when tracked and stored; `implied`:
+    /// each vertex's one wedge when the log left every wedge edit implied
+    /// by it (`Features::edits_implied`) — then `wedges` may be `None`,
+    /// every corner having its vertex's wedge (`Features::corners_implied`).
     pub(crate) fn from_log(
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
@@ -248,11 +250,22 @@ impl ProgressiveMesh {
         // the merged positions need the log in order; the rest of each
         // split only reads shared maps, so splits are built in parallel
         let p_merged = merged_positions(positions, records);
+        // one wedge per vertex (no seam, no attribute): the per-split
+        // edits follow from it and are not stored (wedgelog.rs)
+        let per_vertex = match implied {
+            // what one_wedge_per_vertex finds from the written-out edits
+            Some(vw) => Some(implied_per_vertex(vw, vertex_alive.len())),
+            None => {
+                wedges.and_then(|w| one_wedge_per_vertex(triangles, w, log, vertex_alive.len()))
+            }
+        };
+        let explicit = wedges.is_some() && per_vertex.is_none();
         let b = SplitBuilder {
             positions,
             triangles,
             log,
-            wedges,
+            // (read for the explicit edits only)
+            wedges: wedges.filter(|_| explicit),
             vnew: &vnew,
             tnew: &tnew,
         };
@@ -261,14 +274,6 @@ impl ProgressiveMesh {
             b.prefetch_ahead(k);
             (&records[n - 1 - k], &p_merged[k])
         };
-        // one wedge per vertex (no seam, no attribute): the per-split
-        // edits follow from it and are not stored (wedgelog.rs)
-        let per_vertex = match implied {
-            // what one_wedge_per_vertex finds from the written-out edits
-            Some(vw) if wedges.is_some() => Some(implied_per_vertex(vw, vertex_alive.len())),
-            _ => wedges.and_then(|w| one_wedge_per_vertex(triangles, w, log, vertex_alive.len())),
-        };
-        let explicit = wedges.is_some() && per_vertex.is_none();
         let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if explicit {
             (0..n)
                 .into_par_iter()
@@ -286,10 +291,17 @@ impl ProgressiveMesh {
                 Vec::new(),
             )
         };
-        let wedges = wedges.map(|w| WedgeLog {
+        // the corners' wedges: stored, or each corner its vertex's
+        let corner_wedges = |t: u32| match (wedges, implied) {
+            (Some(w), _) => w[t as usize],
+            (None, Some(vw)) => triangles[t as usize].map(|v| vw[v as usize]),
+            (None, None) => [0; 3],
+        };
+        let tracked = wedges.is_some() || implied.is_some();
+        let wedges = tracked.then(|| WedgeLog {
             base: triangle_origin[..base_triangles]
                 .iter()
-                .map(|&t| w[t as usize])
+                .map(|&t| corner_wedges(t))
                 .collect(),
             splits: split_wedges,
             per_vertex: per_vertex

@@ -423,8 +423,9 @@ impl Simplifier {
         self.version = Vec::new();
         self.attributes = None;
         self.cost_scale = None;
-        // (the per-corner array, now that the quadrics are freed)
-        if let Some(f) = &mut self.features {
+        // implied corners stay implied for the log's renumbering when the
+        // edits are (from_log reads each corner's wedge from its vertex)
+        if let Some(f) = self.features.as_mut().filter(|f| !f.edits_implied) {
             f.store_wedges(&self.tris);
         }
         let pm = ProgressiveMesh::from_log(
