@@ -258,8 +258,10 @@ fn cow_simplifies_cleanly_and_replays_exactly() {
 
 /// A partitioned run (clusters of `size` triangles) on pools of 1, 2 and 4
 /// threads: the three progressive meshes must be the same, and the run's
-/// own final state the base mesh of its log.
-fn partitioned(m: &Mesh, opts: &SimplifyOptions, size: usize) -> ProgressiveMesh {
+/// own final state the base mesh of its log. With `wedges`, every vertex
+/// is its own wedge (the CLI's path on a scan: open borders are feature
+/// lines).
+fn partitioned(m: &Mesh, opts: &SimplifyOptions, size: usize, wedges: bool) -> ProgressiveMesh {
     let opts = opts.with_partition(Some(size));
     let mut outs = [1, 2, 4].map(|threads| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -268,6 +270,9 @@ fn partitioned(m: &Mesh, opts: &SimplifyOptions, size: usize) -> ProgressiveMesh
             .unwrap();
         pool.install(|| {
             let mut s = Simplifier::new(m, &opts).unwrap();
+            if wedges {
+                s.set_wedges(m.triangles.clone());
+            }
             s.run();
             let snap = s.snapshot();
             let (pm, stats) = s.finish();
@@ -307,10 +312,10 @@ proptest! {
     /// mesh) keep every invariant: clean levels, exact replay, the same
     /// log for any thread count.
     #[test]
-    fn partitioned_runs_keep_every_invariant(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.1, size in 6usize..28) {
+    fn partitioned_runs_keep_every_invariant(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.1, size in 6usize..28, wedges in any::<bool>()) {
         let m = prepare(&random_mesh(kind, seed).positions, &random_mesh(kind, seed).indices()).unwrap().mesh;
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
-        let pm = partitioned(&m, &opts, size);
+        let pm = partitioned(&m, &opts, size, wedges);
         check_levels(&pm, true);
         prop_assert_eq!(pm.full_in_input_order(), m);
     }
@@ -325,7 +330,7 @@ fn partitioned_cow_replays_exactly_and_differs_from_the_whole_mesh_walk_below_te
     let m = prepare(&p, &idx).unwrap().mesh;
     for ratio in [0.5, 0.1, 0.02] {
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
-        let pm = partitioned(&m, &opts, 500);
+        let pm = partitioned(&m, &opts, 500, false);
         check_levels(&pm, true);
         assert_eq!(pm.full_in_input_order(), m);
         // the clusters really were simplified on their own, but for a

@@ -110,6 +110,30 @@ impl Features {
         f
     }
 
+    /// The feature state of the vertices `verts` (global ids, increasing)
+    /// as a simplifier of those vertices alone numbers them (a cluster of
+    /// `partition`): each keeps its kind and its feature neighbours among
+    /// `verts`. Wedges are not carried (the cluster's log records none:
+    /// with one wedge per vertex its edits are implied).
+    pub fn restricted(&self, verts: &[u32]) -> Features {
+        let mut nbrs = Nbrs::new(verts.len());
+        for (i, &g) in verts.iter().enumerate() {
+            for &x in &self.nbrs[g] {
+                if let Ok(j) = verts.binary_search(&x) {
+                    nbrs.push(i as u32, j as u32);
+                }
+            }
+        }
+        Features {
+            nbrs,
+            kind: verts.iter().map(|&g| self.kind[g as usize]).collect(),
+            wedges: None,
+            corners_implied: false,
+            vertex_wedge: None,
+            edits_implied: false,
+        }
+    }
+
     /// Mark `a–b` as a feature edge; `false` if it already was one.
     pub fn add(&mut self, a: u32, b: u32) -> bool {
         if a == b || self.nbrs[a].contains(&b) {

@@ -362,16 +362,19 @@ impl Simplifier {
         // timed once, not per step (two clock reads per contraction were
         // 2 % of a bunny run)
         let t0 = Instant::now();
-        if let Some(size) = self.partition_size() {
-            self.run_partitioned(size);
-        }
-        // (batched on one thread too: the walk then plans a batch ahead
-        // with its prefetches, 10 % less CPU time than step by step)
-        let batched = matches!(self.opts.schedule, Schedule::Passes { .. });
         let meter = self.meter.clone();
         if let Some(m) = &meter {
             m.begin(self.live_tris, self.target);
         }
+        if let Some(size) = self.partition_size() {
+            self.run_partitioned(size);
+            if let Some(m) = &meter {
+                m.set_live(self.live_tris);
+            }
+        }
+        // (batched on one thread too: the walk then plans a batch ahead
+        // with its prefetches, 10 % less CPU time than step by step)
+        let batched = matches!(self.opts.schedule, Schedule::Passes { .. });
         let mut walk = || loop {
             let step = match self.opts.schedule {
                 Schedule::Passes { factor } if batched => self.walk_batch(factor),

@@ -33,10 +33,16 @@
 //! cluster, then step, which keeps each cluster's order), and the whole
 //! mesh continues with the usual passes, the borders now free.
 //!
-//! Position-only runs with the pass schedule and without τ pairs, to at
-//! most `KEEP / 2` of the input, take this path (feature edges, wedges and
-//! attribute quadrics keep the whole-mesh walk), on meshes of at least
-//! `MIN_CLUSTERS` clusters.
+//! Runs with the pass schedule and without τ pairs, to at most `KEEP / 2`
+//! of the input, on meshes of at least `MIN_CLUSTERS` clusters, take this
+//! path: position-only runs, and runs with feature edges and wedges as
+//! long as every vertex has one wedge (the CLI's and Python's path on a
+//! scan: open borders are the feature lines, the wedge edits implied).
+//! Each cluster takes the feature state of its vertices
+//! (`Features::restricted`; an interior vertex's feature neighbours are
+//! all in its cluster), and the merge replays `Features::contract` in the
+//! merged order. Seams (wedges that differ at a vertex) and attribute
+//! quadrics keep the whole-mesh walk.
 
 use super::{Pass, Simplifier, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
@@ -100,7 +106,11 @@ impl Simplifier {
         let size = self.opts.partition.filter(|&s| s > 0)?;
         let nt = self.tris.len();
         let applies = matches!(self.opts.schedule, Schedule::Passes { .. })
-            && self.features.is_none()
+            && self.features.as_ref().is_none_or(|f| {
+                // (wedges only as one per vertex, whose edits the log
+                // does not record: the clusters' logs carry no wedges)
+                !f.tracked() || (f.vertex_wedge.is_some() && f.edits_implied)
+            })
             && self.attributes.is_none()
             && self.partners.is_empty()
             && self.log.records.is_empty()
@@ -253,7 +263,7 @@ impl Simplifier {
                 .cost_scale
                 .as_ref()
                 .map(|s| verts.iter().map(|g| s[get(g)]).collect()),
-            features: None,
+            features: self.features.as_ref().map(|f| f.restricted(verts)),
             attributes: None,
             meter: None,
         }
@@ -283,6 +293,16 @@ impl Simplifier {
         for (t, tri) in s.tris.iter().enumerate() {
             self.tris[start + t] = tri.map(|x| verts[x as usize]);
             self.tri_alive[start + t] = s.tri_alive[t];
+        }
+        if let Some(f) = &mut self.features {
+            // one wedge per vertex: each corner's wedge is its vertex's
+            // (a dead triangle's as it died: its corners stay as they were)
+            if let (Some(w), Some(vw)) = (&mut f.wedges, &f.vertex_wedge) {
+                let range = start..start + s.tris.len();
+                for (wt, tri) in w[range.clone()].iter_mut().zip(&self.tris[range]) {
+                    *wt = tri.map(|v| vw[v as usize]);
+                }
+            }
         }
         self.live_tris -= s.tris.len() - s.live_tris;
         self.stats.collapses += s.stats.collapses;
@@ -328,9 +348,16 @@ impl Simplifier {
                 });
             }
             let removed: SmallVec<[u32; 2]> = r.removed.iter().map(|&t| d.start + t).collect();
+            let (v0, v1) = (d.verts[r.v0 as usize], d.verts[r.v1 as usize]);
+            if let Some(f) = &mut self.features {
+                // the feature lines as the contractions in this order
+                // leave them (the clusters' edits of a held vertex's
+                // neighbours, e.g. along an open border, meet here)
+                f.contract(v0, v1);
+            }
             self.log.records.push(Contraction {
-                v0: d.verts[r.v0 as usize],
-                v1: d.verts[r.v1 as usize],
+                v0,
+                v1,
                 p1: r.p1,
                 removed: Removed::new(&removed),
                 moved: mark..self.log.mark(),
@@ -437,4 +464,62 @@ fn add_rejections(to: &mut Rejections, r: &Rejections) {
     to.duplicate += r.duplicate;
     to.error += r.error;
     to.feature += r.feature;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simplify::features::Features;
+    use crate::{shapes, SimplifyOptions};
+
+    /// With wedges (one per vertex) the clusters' rounds keep the feature
+    /// lines right: after the write-back and the merge, every live
+    /// vertex's feature neighbours are its open-border neighbours in the
+    /// current mesh, as the serial walk keeps them, and every corner's
+    /// wedge is its vertex's. (Fails when the merge does not replay
+    /// `Features::contract`: a held vertex on the open border keeps a
+    /// removed neighbour.)
+    #[test]
+    fn clusters_keep_the_feature_lines_and_wedges() {
+        let m = shapes::grid(60, 60, |x, y| 0.1 * (7.0 * x).sin() * (5.0 * y).cos());
+        let opts = SimplifyOptions::DEFAULT
+            .with_target_ratio(0.02)
+            .with_partition(Some(400));
+        let mut s = Simplifier::new(&m, &opts).unwrap();
+        let ids: Vec<[u32; 3]> = m.triangles.clone();
+        s.set_wedges(ids);
+        let size = s.partition_size().expect("a partitioned run");
+        s.run_partitioned(size);
+        assert!(s.log.records.len() > m.triangles.len() / 4);
+        let live: Vec<[u32; 3]> = (0..s.tris.len())
+            .filter(|&t| s.tri_alive[t])
+            .map(|t| s.tris[t])
+            .collect();
+        let fresh = Features::new(s.pos.len(), &live);
+        let f = s.features.as_ref().unwrap();
+        // the clusters did contract along the open border
+        let border = Features::new(s.pos.len(), &m.triangles);
+        assert!(s.log.records.iter().any(|r| !border.nbrs[r.v0].is_empty()));
+        for v in 0..s.pos.len() as u32 {
+            if !s.alive[v as usize] {
+                continue;
+            }
+            let mut a = f.nbrs[v].to_vec();
+            let mut b = fresh.nbrs[v].to_vec();
+            a.sort_unstable();
+            b.sort_unstable();
+            assert_eq!(a, b, "feature neighbours of {v}");
+            assert_eq!(f.kind[v as usize], fresh.kind[v as usize]);
+        }
+        // (stored per corner, or implied by each vertex's wedge)
+        let vw = f.vertex_wedge.as_ref().unwrap();
+        match &f.wedges {
+            Some(w) => {
+                for (t, tri) in s.tris.iter().enumerate() {
+                    assert_eq!(w[t], tri.map(|v| vw[v as usize]), "triangle {t}");
+                }
+            }
+            None => assert!(f.corners_implied),
+        }
+    }
 }
