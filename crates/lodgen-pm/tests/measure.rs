@@ -200,39 +200,69 @@ proptest! {
     }
 }
 
-/// Triangles at x = 2^i: the SAH splits off a few triangles per level, so the build must switch
-/// to median splits to keep the tree (and the query stack) shallow; answers stay exact.
+/// Triangles at x = 2^i (most share the Morton code 0: halved by count) and triangles whose
+/// Morton codes each have a different highest bit (each split of the build peels one off: a
+/// chain of about 60 levels, near the deepest the codes allow), plus many on one point
+/// (halved): the tree
+/// stays within its depth bound (a query's stack is sized by it; a deeper tree fails the
+/// stack's debug assertion) and answers stay exact.
 #[test]
-fn bvh_on_exponentially_spaced_triangles_matches_brute_force() {
+fn bvh_on_adversarial_placements_matches_brute_force() {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
+    let mut tiny = |c: [f32; 3], e: f32| {
+        let v = positions.len() as u32;
+        positions.extend([c, [c[0] + e, c[1], c[2]], [c[0], c[1] + e, c[2]]]);
+        triangles.push([v, v + 1, v + 2]);
+    };
     for i in -120..120 {
         let x = 2f32.powi(i);
-        let v = positions.len() as u32;
-        positions.extend([[x, 0.0, 0.0], [x, x, 0.0], [x, 0.0, x]]);
-        triangles.push([v, v + 1, v + 2]);
+        tiny([x, 0.0, x], x);
     }
-    let bvh = TriangleBvh::new(MeshRef::new(&positions, &triangles)).unwrap();
-    // Unchecked, the SAH chains about 70 levels deep here (it splits off ~3 triangles per
-    // level); the build stops it at 48 and median-splits the ~100 left: log2(100 / 4) rounded
-    // up, plus the leaf level.
-    assert!(bvh.depth() <= 48 + 6, "depth {}", bvh.depth());
-    assert!(
-        bvh.depth() > 40,
-        "the SAH should chain here; depth {}",
-        bvh.depth()
-    );
-    for i in (-122..122).step_by(3) {
-        let p = [2f64.powi(i) * 1.3, 0.25, -0.5];
-        let brute = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|v| positions[v as usize].map(f64::from));
-                distance_squared(p, closest_point_on_triangle(p, a, b, c))
-            })
-            .fold(f64::INFINITY, f64::min);
-        let (d2, _, _) = bvh.closest_point(p).unwrap();
-        assert!((d2 - brute).abs() <= 1e-12 * brute, "{i}: {d2} vs {brute}");
+    let exponential = (positions.clone(), triangles.clone());
+    positions.clear();
+    triangles.clear();
+    let mut tiny = |c: [f32; 3], e: f32| {
+        let v = positions.len() as u32;
+        positions.extend([c, [c[0] + e, c[1], c[2]], [c[0], c[1] + e, c[2]]]);
+        triangles.push([v, v + 1, v + 2]);
+    };
+    tiny([1.0, 1.0, 1.0], 1e-9);
+    for k in 0..21 {
+        for axis in 0..3 {
+            let mut c = [0.0f32; 3];
+            c[axis] = 1.5 * 2f32.powi(k - 21);
+            tiny(c, 1e-9);
+        }
+    }
+    for _ in 0..1000 {
+        tiny([0.5, 0.5, 0.5], 1e-3);
+    }
+    let chain = (positions, triangles);
+    for (name, (positions, triangles), min_depth) in
+        [("exponential", exponential, 8), ("chain", chain, 55)]
+    {
+        let bvh = TriangleBvh::new(MeshRef::new(&positions, &triangles)).unwrap();
+        assert!(
+            (min_depth..=96).contains(&bvh.depth()),
+            "{name}: depth {}",
+            bvh.depth()
+        );
+        for i in (-122..122).step_by(3) {
+            let p = [2f64.powi(i) * 1.3, 0.25, -0.5];
+            let brute = triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|v| positions[v as usize].map(f64::from));
+                    distance_squared(p, closest_point_on_triangle(p, a, b, c))
+                })
+                .fold(f64::INFINITY, f64::min);
+            let (d2, _, _) = bvh.closest_point(p).unwrap();
+            assert!(
+                (d2 - brute).abs() <= 1e-12 * brute,
+                "{name} {i}: {d2} vs {brute}"
+            );
+        }
     }
 }
 

@@ -32,7 +32,7 @@
 
 use rayon::prelude::*;
 
-use super::bvh::TriangleBvh;
+use super::bvh::{Hint, TriangleBvh};
 use super::triangle::{dot, sub, widen};
 use super::MeshRef;
 
@@ -85,6 +85,8 @@ struct Corner {
     p: [f64; 3],
     d2: f64,
     slot: u32,
+    /// Where a search from this corner starts (`None`: from the root).
+    hint: Option<Hint>,
 }
 
 /// A triangle (or part of one) of the sampled mesh waiting to be bounded.
@@ -174,7 +176,7 @@ fn bound_chunk(
         queries: 0,
         at: None,
     };
-    let mut hint: Option<u32> = None;
+    let mut hint: Option<Hint> = None;
     let mut stack: Vec<Cell> = Vec::new();
     let mut recent = Recent::default();
     for &t in tris {
@@ -223,6 +225,7 @@ impl Recent {
             p,
             d2: f64::INFINITY,
             slot: u32::MAX,
+            hint: None,
         };
         let mut cell = Cell::new(p.map(corner), &[], 0);
         cell.n = 0;
@@ -234,17 +237,22 @@ impl Recent {
 
 /// The exact nearest triangle of `q`, searched from `hint`; raises the maximum.
 #[inline]
-fn exact(to: &TriangleBvh, q: [f64; 3], hint: &mut Option<u32>, out: &mut BoundedMax) -> Corner {
-    let (d2, slot, _) = to
+fn exact(to: &TriangleBvh, q: [f64; 3], hint: &mut Option<Hint>, out: &mut BoundedMax) -> Corner {
+    let (d2, h, _) = to
         .closest_slot(q, *hint)
         .expect("a non-empty hierarchy always has an answer");
-    *hint = Some(slot);
+    *hint = Some(h);
     out.queries += 1;
     if d2 > out.max2 {
         out.max2 = d2;
         out.at = Some(q);
     }
-    Corner { p: q, d2, slot }
+    Corner {
+        p: q,
+        d2,
+        slot: h.slot,
+        hint: Some(h),
+    }
 }
 
 /// Bounds `cell`: settled when its upper bound (the better of [`simple_bound`] and
@@ -273,7 +281,7 @@ fn refine(
     let [a, b, c] = cell.c;
     let mid = |x: &Corner, y: &Corner, out: &mut BoundedMax| {
         let q = std::array::from_fn(|k| 0.5 * (x.p[k] + y.p[k]));
-        exact(to, q, &mut Some(x.slot), out)
+        exact(to, q, &mut { x.hint }, out)
     };
     let ab = mid(&a, &b, out);
     let bc = mid(&b, &c, out);
@@ -440,8 +448,13 @@ mod tests {
         let z = 0.01;
         let q = [[-0.5, -0.2, z], [0.5, -0.2, z], [0.0, 0.5, z]];
         let c = q.map(|p| {
-            let (d2, slot, _) = bvh.closest_slot(p, None).unwrap();
-            Corner { p, d2, slot }
+            let (d2, h, _) = bvh.closest_slot(p, None).unwrap();
+            Corner {
+                p,
+                d2,
+                slot: h.slot,
+                hint: Some(h),
+            }
         });
         let cell = Cell::new(c, &[0, 1, 2, 3], 0);
         let simple = simple_bound(&cell, &bvh, 0.0).sqrt();

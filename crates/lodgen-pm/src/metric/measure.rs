@@ -34,7 +34,7 @@ use super::sampling::{
     area_samples, max_above, measure_points, seek, Partial, SampleSet, Site, MAX_CANDIDATES,
 };
 use super::triangle::widen;
-use super::{MeshError, MeshRef};
+use super::{zorder, MeshError, MeshRef};
 
 /// [`measure`]'s error: which mesh is invalid and why.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
@@ -150,27 +150,7 @@ pub fn measure(
 ) -> Result<ErrorReport, MeasureError> {
     a.validate().map_err(MeasureError::A)?;
     b.validate().map_err(MeasureError::B)?;
-    // A→B needs only B's hierarchy, so it runs while A's (usually the larger) is being built.
-    let (reference, a_to_b) = rayon::join(
-        || Reference::build_validated(a),
-        || {
-            let samples_a = SampleSet::new(a);
-            let bvh_b = TriangleBvh::build_validated(b);
-            let plan = Plan::new(
-                opts,
-                a.triangles.len(),
-                b.triangles.len(),
-                a.bbox_diagonal(),
-            );
-            measure_from(a, &samples_a, &bvh_b, &plan)
-        },
-    );
-    let b_to_a = reference.b_to_a(b, opts);
-    Ok(ErrorReport {
-        a_to_b,
-        b_to_a,
-        diagonal: reference.diagonal,
-    })
+    Ok(Reference::build_validated(a).measure_validated(b, opts))
 }
 
 /// An original mesh A prepared for measuring others against it: its hierarchy (for B→A) and
@@ -196,7 +176,11 @@ impl<'a> Reference<'a> {
     }
 
     fn build_validated(a: MeshRef<'a>) -> Reference<'a> {
-        let (bvh, samples) = rayon::join(|| TriangleBvh::build_validated(a), || SampleSet::new(a));
+        let z = zorder::triangles(a);
+        let (bvh, samples) = rayon::join(
+            || TriangleBvh::from_zorder(a, &z),
+            || SampleSet::new(a, &z.ids),
+        );
         Reference {
             mesh: a,
             bvh,
@@ -221,33 +205,33 @@ impl<'a> Reference<'a> {
     /// [`MeshError`] when `b` has an out-of-range index or a non-finite position.
     pub fn measure(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> Result<ErrorReport, MeshError> {
         b.validate()?;
+        Ok(self.measure_validated(b, opts))
+    }
+
+    /// [`Self::measure`] for a validated `b`: B's Z-order once, then A→B (over B's hierarchy,
+    /// built from that order) and B→A (B's samples along it) side by side. B→A uses a
+    /// different random stream than A→B, so that measuring a mesh against itself does not
+    /// sample the same points twice.
+    fn measure_validated(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> ErrorReport {
         let a = self.mesh;
+        let z = zorder::triangles(b);
         let (a_to_b, b_to_a) = rayon::join(
             || {
-                let bvh_b = TriangleBvh::build_validated(b);
+                let bvh_b = TriangleBvh::from_zorder(b, &z);
                 let plan = Plan::new(opts, a.triangles.len(), b.triangles.len(), self.diagonal);
-                measure_from(a, &self.samples, &bvh_b, &plan)
+                measure_from(a, self.bvh.order(), &self.samples, &bvh_b, &plan)
             },
-            || self.b_to_a(b, opts),
+            || {
+                let mut plan = Plan::new(opts, b.triangles.len(), a.triangles.len(), self.diagonal);
+                plan.seed ^= 0xb5ad_4ece_da1c_e2a9;
+                measure_from(b, &z.ids, &SampleSet::new(b, &z.ids), &self.bvh, &plan)
+            },
         );
-        Ok(ErrorReport {
+        ErrorReport {
             a_to_b,
             b_to_a,
             diagonal: self.diagonal,
-        })
-    }
-
-    /// B→A for a validated `b`. A different random stream than A→B, so that measuring a mesh
-    /// against itself does not sample the same points twice.
-    fn b_to_a(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> Distance {
-        let mut plan = Plan::new(
-            opts,
-            b.triangles.len(),
-            self.mesh.triangles.len(),
-            self.diagonal,
-        );
-        plan.seed ^= 0xb5ad_4ece_da1c_e2a9;
-        measure_from(b, &SampleSet::new(b), &self.bvh, &plan)
+        }
     }
 }
 
@@ -263,7 +247,9 @@ pub fn one_sided(
 ) -> Result<Distance, MeshError> {
     from.validate()?;
     let plan = Plan::new(opts, from.triangles.len(), to.len(), from.bbox_diagonal());
-    Ok(measure_from(from, &SampleSet::new(from), to, &plan))
+    let order = zorder::triangles(from).ids;
+    let set = SampleSet::new(from, &order);
+    Ok(measure_from(from, &order, &set, to, &plan))
 }
 
 /// How one direction is measured: the options and what they come to for two meshes.
@@ -313,13 +299,19 @@ fn mean_rms(stats: &Partial) -> (f64, f64) {
     }
 }
 
-/// The one-sided measurement from the validated mesh `from`, whose [`SampleSet`] is `set`, to
-/// the surface in `to`.
-fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Plan) -> Distance {
+/// The one-sided measurement from the validated mesh `from`, whose triangles' Z-order is
+/// `order` and [`SampleSet`] `set`, to the surface in `to`.
+fn measure_from(
+    from: MeshRef<'_>,
+    order: &[u32],
+    set: &SampleSet,
+    to: &TriangleBvh,
+    plan: &Plan,
+) -> Distance {
     if from.triangles.is_empty() {
         return Distance::NONE;
     }
-    let area = area_samples(from, set, to, plan.area_samples, plan.seed);
+    let area = area_samples(from, order, set, to, plan.area_samples, plan.seed);
     let vertex = |i: usize, _: &mut usize| {
         let v = set.vertices[i];
         (widen(from.positions[v as usize]), Site::Vertex(v))
@@ -331,7 +323,7 @@ fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Pla
         } else {
             measure_points(set.vertices.len(), to, vertex)
         };
-        let max = bounded_max(from, &set.order, to, stats.max2, plan.tolerance);
+        let max = bounded_max(from, order, to, stats.max2, plan.tolerance);
         let (mean, rms) = mean_rms(&stats);
         return Distance {
             max: max.max2.sqrt(),
@@ -365,7 +357,7 @@ fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Pla
     if plan.coarse && area.count > 0 {
         // maxima of a coarse mesh's distance sit inside its large triangles: one point each
         let centroid = |i: usize, _: &mut usize| {
-            let tri = set.order[i];
+            let tri = order[i];
             let [a, b, c] = from.triangles[tri as usize].map(|v| widen(from.positions[v as usize]));
             let p = std::array::from_fn(|j| (a[j] + b[j] + c[j]) / 3.0);
             let third = 1.0 / 3.0;
@@ -378,7 +370,7 @@ fn measure_from(from: MeshRef<'_>, set: &SampleSet, to: &TriangleBvh, plan: &Pla
                 },
             )
         };
-        let found = max_above(set.order.len(), to, best.max2, centroid);
+        let found = max_above(order.len(), to, best.max2, centroid);
         samples += found.count;
         if found.at.is_some() && found.max2 > best.max2 {
             best.max2 = found.max2;

@@ -2,8 +2,11 @@
 //! (Hausdorff, mean, RMS, both directions), over a BVH of triangles.
 //!
 //! * `triangle.rs`: the exact point–triangle distance (pure geometry).
-//! * [`bvh`]: closest point on a triangle mesh (a 4-wide BVH with `f32` SIMD
-//!   box tests, exact `f64` answers); knows nothing about sampling.
+//! * `zorder.rs`: the Z-order of a mesh's triangles and vertices (one radix
+//!   sort per mesh, shared by the hierarchy and the sampling).
+//! * [`bvh`]: closest point on a triangle mesh (a 4-wide BVH built along the
+//!   Z-order, `f32` SIMD box tests, exact `f64` answers); knows nothing about
+//!   sampling.
 //! * `sampling.rs`: where the measured points come from (stratified area
 //!   samples, vertices, centroids, the max-seeking search) and the chunked,
 //!   in-order folds that measure them.
@@ -33,6 +36,7 @@ pub mod measure;
 mod options;
 mod sampling;
 mod triangle;
+mod zorder;
 
 pub use bvh::TriangleBvh;
 pub use measure::*;

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::bvh::TriangleBvh;
 use super::triangle::widen;
-use super::MeshRef;
+use super::{zorder, MeshRef};
 
 /// Sample indices per unit of parallel work. Fixed (never derived from the thread count), so
 /// the summation order is fixed. 4096 queries take ~1 ms: coarse enough to amortise rayon's
@@ -182,11 +182,11 @@ pub(super) fn measure_points(
             let mut cursor = usize::MAX;
             for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
                 let (p, site) = point(i, &mut cursor);
-                let Some((d2, slot, _)) = to.closest_slot(p, hint) else {
+                let Some((d2, h, _)) = to.closest_slot(p, hint) else {
                     acc.add(f64::INFINITY, p, site);
                     continue;
                 };
-                hint = Some(slot);
+                hint = Some(h);
                 acc.add(d2, p, site);
             }
             acc
@@ -267,105 +267,44 @@ fn triangle_area(mesh: MeshRef<'_>, t: [u32; 3]) -> f64 {
     0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
 }
 
-/// Spreads the low 21 bits of `x` to every third bit (Morton code helper).
-fn spread3(x: u64) -> u64 {
-    let mut x = x & 0x1f_ffff;
-    x = (x | x << 32) & 0x001f_0000_0000_ffff;
-    x = (x | x << 16) & 0x001f_0000_ff00_00ff;
-    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-    x = (x | x << 2) & 0x1249_2492_4924_9249;
-    x
-}
-
-/// Morton (Z-order) codes of points quantised on a 2²¹ grid over the box `lo..hi`.
-fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
-    let q = |k: usize| {
-        let extent = hi[k] - lo[k];
-        if extent > 0.0 {
-            (((p[k] - lo[k]) / extent) * 2_097_151.0) as u64
-        } else {
-            0
-        }
-    };
-    spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
-}
-
-/// Sorts `items` (vertex or triangle ids) along the Z-order curve through `key(id)`, ties by id.
-fn z_order(items: &mut [u32], key: impl Fn(u32) -> [f64; 3], lo: [f64; 3], hi: [f64; 3]) {
-    let mut keyed: Vec<(u64, u32)> = items.iter().map(|&i| (morton(key(i), lo, hi), i)).collect();
-    keyed.sort_unstable();
-    for (dst, (_, i)) in items.iter_mut().zip(keyed) {
-        *dst = i;
-    }
-}
-
-/// Where the samples of a mesh come from: its triangles along a Z-order curve with their
-/// cumulative areas, and the vertices its triangles use, in Z-order. Depends only on the mesh.
+/// Where the samples of a mesh come from, besides its triangles' Z-order (the hierarchy's
+/// leaf order, [`TriangleBvh::order`], or [`zorder::triangles`]): the cumulative areas along
+/// that order, and the vertices its triangles use, in Z-order. Depends only on the mesh.
+///
+/// Along the curve consecutive samples are near each other: the previous answer is a tight
+/// first bound for the next query (and its hierarchy path is in cache), and stratifying along
+/// the curve spreads the samples evenly over the surface.
 #[derive(Clone, Debug)]
 pub(super) struct SampleSet {
-    /// Triangle ids along the curve.
-    pub order: Vec<u32>,
-    /// Cumulative area along `order`, summed sequentially (deterministic).
+    /// Cumulative area along the triangles' Z-order, summed sequentially (deterministic).
     pub cumulative: Vec<f64>,
     /// Used vertices along the curve.
     pub vertices: Vec<u32>,
 }
 
 impl SampleSet {
-    /// Triangles and vertices of `mesh` (validated) are put along a Z-order curve, so
-    /// consecutive samples are near each other: the previous answer is a tight first bound for
-    /// the next query (and its BVH path is in cache), and stratifying along the curve spreads
-    /// the samples evenly over the surface.
-    pub(super) fn new(mesh: MeshRef<'_>) -> SampleSet {
-        let nt = mesh.triangles.len();
-        let corners =
-            |t: u32| mesh.triangles[t as usize].map(|v| widen(mesh.positions[v as usize]));
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        let mut used = vec![false; mesh.positions.len()];
-        for t in mesh.triangles {
-            for &v in t {
-                used[v as usize] = true;
-                let p = widen(mesh.positions[v as usize]);
-                for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-            }
-        }
-        let mut order: Vec<u32> = (0..nt as u32).collect();
-        z_order(
-            &mut order,
-            |t| {
-                let [a, b, c] = corners(t);
-                std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)
-            },
-            lo,
-            hi,
-        );
-        let mut cumulative = Vec::with_capacity(nt);
+    /// The sample set of the validated `mesh` whose triangles' Z-order is `order`.
+    pub(super) fn new(mesh: MeshRef<'_>, order: &[u32]) -> SampleSet {
         let mut total = 0.0f64;
-        for &t in &order {
-            total += triangle_area(mesh, mesh.triangles[t as usize]);
-            cumulative.push(total);
-        }
-        let mut vertices: Vec<u32> = (0..mesh.positions.len() as u32)
-            .filter(|&v| used[v as usize])
+        let cumulative = order
+            .iter()
+            .map(|&t| {
+                total += triangle_area(mesh, mesh.triangles[t as usize]);
+                total
+            })
             .collect();
-        z_order(&mut vertices, |v| widen(mesh.positions[v as usize]), lo, hi);
         SampleSet {
-            order,
             cumulative,
-            vertices,
+            vertices: zorder::vertices(mesh),
         }
     }
 }
 
-/// `count` stratified area samples of the validated, non-empty mesh `from` (whose
-/// [`SampleSet`] is `set`) measured against `to`; none when `from` has no area.
+/// `count` stratified area samples of the validated, non-empty mesh `from` (whose triangles'
+/// Z-order is `order` and [`SampleSet`] `set`) measured against `to`; none when `from` has no area.
 pub(super) fn area_samples(
     from: MeshRef<'_>,
+    order: &[u32],
     set: &SampleSet,
     to: &TriangleBvh,
     count: usize,
@@ -373,7 +312,7 @@ pub(super) fn area_samples(
 ) -> Partial {
     let nt = from.triangles.len();
     let corners = |t: u32| from.triangles[t as usize].map(|v| widen(from.positions[v as usize]));
-    let (order, cumulative) = (&set.order, &set.cumulative);
+    let cumulative = &set.cumulative;
     let total = cumulative.last().copied().unwrap_or(0.0);
     let count = if total > 0.0 { count } else { 0 };
     measure_points(count, to, |i, cursor| {
@@ -477,10 +416,10 @@ pub(super) fn seek(
                     if u2 < 0.0 || v2 < 0.0 || u2 + v2 > 1.0 {
                         continue;
                     }
-                    let Some((e2, slot, _)) = to.closest_slot(at(u2, v2), hint) else {
+                    let Some((e2, h, _)) = to.closest_slot(at(u2, v2), hint) else {
                         break;
                     };
-                    hint = Some(slot);
+                    hint = Some(h);
                     acc.count += 1;
                     if e2 > best.0 {
                         best = (e2, u2, v2);
