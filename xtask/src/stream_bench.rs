@@ -14,7 +14,8 @@
 //!
 //! and prints the table the README's Streaming section quotes, with the
 //! stream's bytes against the plain file's and each time's floor (one
-//! latency + the bytes needed at the line rate). `--bytes` writes the files
+//! latency + the bytes needed at the line rate), and the best ratios those
+//! floors allow (first pixel or full detail floor over the plain floor). `--bytes` writes the files
 //! and prints the stream's bytes per column kind instead (no browser).
 
 use anyhow::{bail, Context, Result};
@@ -185,8 +186,9 @@ pub fn run(args: &[String]) -> Result<()> {
         "\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; median of {runs}"
     );
     println!("floors: one latency + the bytes needed at the line rate (plain: the file; first pixel: JSON + coarsest level; full: + stream), no parsing or drawing");
+    println!("(floor ratios: the best first/pl and full/pl these bytes allow, floor over the plain floor; first/pl <= 0.1 needs a plain file of at least 9 latencies of bytes)");
     println!(
-        "{:<9} {:>9} {:>12} {:>9} {:>12} {:>13} {:>10} {:>9} {:>11} {:>9}",
+        "{:<9} {:>9} {:>12} {:>9} {:>12} {:>13} {:>10} {:>9} {:>11} {:>9} {:>9} {:>9}",
         "mesh",
         "plain ms",
         "stream/plain",
@@ -196,12 +198,14 @@ pub fn run(args: &[String]) -> Result<()> {
         "full ms",
         "floor",
         "first/pl",
-        "full/pl"
+        "(floor)",
+        "full/pl",
+        "(floor)"
     );
     for (id, r, ratio, [plain, first, full]) in &rows {
         let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
         println!(
-            "{:<9} {:>9.0} {:>11.2}× {:>9.0} {:>12.0} {:>13.0} {:>10.0} {:>9.0} {:>10.2}× {:>8.2}×",
+            "{:<9} {:>9.0} {:>11.2}× {:>9.0} {:>12.0} {:>13.0} {:>10.0} {:>9.0} {:>10.2}× {:>8.2}× {:>8.2}× {:>8.2}×",
             id,
             f("plainMs"),
             ratio,
@@ -211,7 +215,9 @@ pub fn run(args: &[String]) -> Result<()> {
             f("fullDetailMs"),
             full,
             f("firstRatio"),
+            first / plain,
             f("fullRatio"),
+            full / plain,
         );
     }
     Ok(())
