@@ -8,6 +8,8 @@
 //! `plain` is `simplify` (position only, what `xtask bench` times);
 //! `wedges` is `simplify_with_wedges` with every vertex its own wedge and
 //! no attributes (what the CLI and the Python module run on a scan).
+//! `cluster triangles` sets `SimplifyOptions::partition` (0: off; default:
+//! the library's default).
 //! The environment variable `REACH=F` sets `SimplifyOptions::reach` to
 //! `Some(F)`.
 
@@ -43,7 +45,10 @@ fn main() {
     let m = mesh_from_args(&args);
     let indices = m.indices();
     let n = m.triangles.len();
-    let partition = args.get(6).map(|s| s.parse::<usize>().unwrap());
+    // (default: the library's; 0 = the whole-mesh walk throughout)
+    let partition = args.get(6).map_or(SimplifyOptions::DEFAULT.partition, |s| {
+        Some(s.parse::<usize>().unwrap())
+    });
     let opts = SimplifyOptions::DEFAULT
         .with_target_ratio(ratio)
         .with_partition(partition)

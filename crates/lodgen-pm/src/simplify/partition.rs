@@ -66,10 +66,16 @@ const MIN_CLUSTERS: usize = 8;
 /// coarser than the whole-mesh walk would leave them, and the whole-mesh
 /// passes that follow (with the borders free) must have room to even that
 /// out before the target: runs to more than half of it keep the
-/// whole-mesh walk. (On the 1.1M bench mesh, stopping at 10 % instead made
-/// its 10 % level's Hausdorff distance 0.041 % instead of 0.000007 %;
-/// at 20 % every level of 50 / 10 / 2 % matches the whole-mesh walk.)
-const KEEP: f64 = 0.2;
+/// whole-mesh walk. Measured on the CLI's path (`lodgen bunny-1m.obj
+/// --levels 50%,10%,2%`; whole-mesh walk 2 % Hausdorff 0.1167 %, RMS
+/// 0.0102 %): 0.1 made the 10 % level's Hausdorff distance 0.041 %
+/// instead of 0.000007 %; 0.15 keeps every level (2 %: 0.1167 %, RMS
+/// 0.0104 %); 0.2 0.1290 %, 0.25 0.1228 %, 0.3 0.1422 %. On subdivided
+/// shared meshes (`cpu_simplify MESH 2|3 1 wedges RATIO 16384`) 0.15 gave
+/// a geometric mean of 0.87 of the whole-mesh walk's Hausdorff distance
+/// over seven cells (0.2: 0.94, with spot ×3 at 1 % +51 %), RMS within
+/// 1.5 % everywhere (docs/performance.md).
+const KEEP: f64 = 0.15;
 
 /// At most this many rounds (the whole-mesh walk needs about ten passes
 /// to 2 %; the rounds stop at `KEEP` well before).
@@ -132,6 +138,10 @@ impl Simplifier {
         };
         let nt = self.tris.len();
         let home = self.homes(size);
+        // (the clusters build their own fans: the whole mesh's are not
+        // read again before they are rebuilt at the end, and freeing them
+        // first keeps them off the peak of the clusters' construction)
+        self.vtris = Fans::default();
         let this = &*self;
         let mut locals: Vec<Local> = (0..nt.div_ceil(size) as u32)
             .into_par_iter()
@@ -144,7 +154,6 @@ impl Simplifier {
             .filter(|&v| home[v] == HELD)
             .map(|v| (v, self.quadric[v]))
             .collect();
-        self.vtris = Fans::default();
         self.quadric = Vec::new();
         self.tris = Vec::new();
         self.tri_alive = Vec::new();
@@ -306,7 +315,8 @@ impl Simplifier {
         }
         self.live_tris -= s.tris.len() - s.live_tris;
         self.stats.collapses += s.stats.collapses;
-        self.stats.passes += s.stats.passes;
+        // (the clusters made the same rounds: count them once)
+        self.stats.passes = self.stats.passes.max(s.stats.passes);
         add_rejections(&mut self.stats.rejected, &s.stats.rejected);
         Done {
             verts,

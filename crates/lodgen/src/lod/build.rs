@@ -161,6 +161,20 @@ pub fn build_one(
     build_mesh(index, &mut Cow::Borrowed(mesh), opts, progress)
 }
 
+/// Give the pages the simplifier freed back to the system before the
+/// measurement builds its trees: glibc returns only the top of each heap
+/// by itself, and the partitioned simplification's clusters (small arrays
+/// made on every pool thread, freed between arrays that live on) leave
+/// holes that otherwise stay resident under the measurement's peak
+/// (bunny-4m whole run 940 → 898 MB).
+fn return_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases free memory of glibc's heaps.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 /// [`build_one`]; an owned `mesh` has its input positions and indices
 /// freed once they are no longer read, unless [`BuildOptions::keep_input`].
 fn build_mesh(
@@ -181,6 +195,7 @@ fn build_mesh(
     let t_build = Instant::now();
     let mut simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
     let simplify_time = t_build.elapsed();
+    return_freed_memory();
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
