@@ -97,8 +97,12 @@ pub struct TriangleBvh {
     nodes: Vec<Node>,
     /// Levels of the binary tree (0 without triangles, 1 when the root is a leaf).
     depth: usize,
-    /// Triangle corners in leaf order.
-    tris: Vec<[[f32; 3]; 3]>,
+    /// Triangles in leaf order, as indices into `points` (12 bytes a triangle instead of the
+    /// 36 of their corners: the tree's largest part).
+    tris: Vec<[u32; 3]>,
+    /// The positions the triangles use, numbered by first use in leaf order (so a leaf's
+    /// corners are near each other in memory).
+    points: Vec<[f32; 3]>,
     /// Input triangle index of each slot of `tris`.
     ids: Vec<u32>,
 }
@@ -248,7 +252,7 @@ impl TriangleBvh {
             collapse(&nodes)
         };
         drop(nodes);
-        let tris: Vec<[[f32; 3]; 3]> = (0..z.ids.len()).map(corners).collect();
+        let (tris, points) = leaf_order_indices(mesh, &z.ids);
         let Some(root) = root else {
             return TriangleBvh {
                 magnitude: 0.0,
@@ -257,6 +261,7 @@ impl TriangleBvh {
                 nodes: Vec::new(),
                 depth: 0,
                 tris,
+                points,
                 ids: Vec::new(),
             };
         };
@@ -271,6 +276,7 @@ impl TriangleBvh {
             nodes: query_nodes,
             depth,
             tris,
+            points,
             ids: z.ids.clone(),
         }
     }
@@ -297,10 +303,11 @@ impl TriangleBvh {
         self.ids.is_empty()
     }
 
-    /// Bytes held by the hierarchy (nodes, triangle corners, ids).
+    /// Bytes held by the hierarchy (nodes, triangles, positions, ids).
     pub fn heap_bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<Node>()
-            + self.tris.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
+            + self.tris.capacity() * std::mem::size_of::<[u32; 3]>()
+            + self.points.capacity() * std::mem::size_of::<[f32; 3]>()
             + self.ids.capacity() * std::mem::size_of::<u32>()
     }
 
@@ -374,14 +381,14 @@ impl TriangleBvh {
     /// Corners of the triangle in leaf slot `slot` (a slot returned by a query).
     #[inline]
     pub(crate) fn slot_triangle(&self, slot: u32) -> [[f64; 3]; 3] {
-        self.tris[slot as usize].map(widen)
+        self.tris[slot as usize].map(|v| widen(self.points[v as usize]))
     }
 
     /// Squared distance from `p` to the triangle in leaf slot `slot` (a slot returned by a
     /// query), without searching.
     #[inline]
     pub(crate) fn slot_distance_squared(&self, p: [f64; 3], slot: u32) -> f64 {
-        let [a, b, c] = self.tris[slot as usize].map(widen);
+        let [a, b, c] = self.slot_triangle(slot);
         distance_squared(p, closest_point_on_triangle(p, a, b, c))
     }
 
@@ -490,7 +497,7 @@ impl TriangleBvh {
     #[inline(always)]
     fn test_leaf(&self, p: [f64; 3], first: u32, count: u32, node: u32, best: &mut Best) {
         for slot in first..first + count {
-            let [a, b, c] = self.tris[slot as usize].map(widen);
+            let [a, b, c] = self.slot_triangle(slot);
             let q = closest_point_on_triangle(p, a, b, c);
             let d2 = distance_squared(p, q);
             if d2 < best.d2 {
@@ -555,6 +562,31 @@ impl Query {
             stop,
         }
     }
+}
+
+/// The triangles of the validated `mesh` in the order `ids`, as indices into the positions they
+/// use, those numbered by first use along that order; and the positions. (A map of the mesh's
+/// vertex count lives while this runs.)
+fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3]>, Vec<[f32; 3]>) {
+    let mut number = vec![u32::MAX; mesh.positions.len()];
+    let mut points: Vec<[f32; 3]> = Vec::new();
+    let tris = ids
+        .iter()
+        .map(|&t| {
+            mesh.triangles[t as usize].map(|v| {
+                let n = &mut number[v as usize];
+                if *n == u32::MAX {
+                    // (at most 3 × u32::MAX triangles' corners, but the numbers are of
+                    // distinct vertices of `positions`, whose indices are u32)
+                    *n = points.len() as u32;
+                    points.push(mesh.positions[v as usize]);
+                }
+                *n
+            })
+        })
+        .collect();
+    points.shrink_to_fit();
+    (tris, points)
 }
 
 /// Collapses the binary build tree into 4-wide query nodes, depth first: each node takes its
