@@ -1,10 +1,10 @@
-//! `cargo xtask stream-bench [--quick] [--runs N] [--bytes]`: time to first pixel and
+//! `cargo xtask stream-bench [--quick] [--runs N] [--bytes] [--mesh NAME]`: time to first pixel and
 //! to full detail of a progressive file against the plain compressed full
 //! mesh, over a throttled local line (10 Mbit/s, 50 ms latency, set in the
 //! server), in headless Chromium with three.js (`tests/js/stream-bench.mjs`).
 //!
 //! Per mesh (the bunny, spot and the 1.1M-triangle subdivided bunny;
-//! `--quick`: the bunny only) it writes, with the release `lodgen`:
+//! `--quick`: the bunny only; `--mesh NAME`: that one) it writes, with the release `lodgen`:
 //! * plain: `lodgen X --levels 100% --quantize --compress meshopt`, loaded by
 //!   GLTFLoader + MeshoptDecoder until drawn;
 //! * progressive: `lodgen X --levels 100%,50%,10%,2% --progressive
@@ -87,23 +87,32 @@ fn line_ms(bytes: usize) -> f64 {
 const MBIT: f64 = 10.0;
 const LATENCY_MS: f64 = 50.0;
 
-/// `--quick`, `--bytes`, `--runs N` (default 3).
-fn parse_args(args: &[String]) -> Result<(bool, bool, usize)> {
+/// `--quick`, `--bytes`, `--runs N` (default 3), `--mesh NAME`.
+fn parse_args(args: &[String]) -> Result<(bool, bool, usize, Option<String>)> {
     let (mut quick, mut bytes_only, mut runs) = (false, false, 3);
+    let mut mesh = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => quick = true,
             "--bytes" => bytes_only = true,
             "--runs" => runs = it.next().context("--runs needs a number")?.parse()?,
+            "--mesh" => {
+                let m = it.next().context("--mesh needs bunny, spot or bunny-1m")?;
+                anyhow::ensure!(
+                    ["bunny", "spot", "bunny-1m"].contains(&m.as_str()),
+                    "stream-bench: unknown mesh {m:?} (bunny, spot or bunny-1m)"
+                );
+                mesh = Some(m.clone());
+            }
             other => bail!("stream-bench: unknown argument {other:?}"),
         }
     }
-    Ok((quick, bytes_only, runs))
+    Ok((quick, bytes_only, runs, mesh))
 }
 
 pub fn run(args: &[String]) -> Result<()> {
-    let (quick, bytes_only, runs) = parse_args(args)?;
+    let (quick, bytes_only, runs, mesh) = parse_args(args)?;
     let root = crate::workspace_root();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
@@ -119,13 +128,13 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     let dir = root.join("target/stream-bench");
     std::fs::create_dir_all(&dir)?;
-    let meshes: &[&str] = if quick {
-        &["bunny"]
-    } else {
-        &["bunny", "spot", "bunny-1m"]
+    let meshes: Vec<&str> = match (&mesh, quick) {
+        (Some(m), _) => vec![m.as_str()],
+        (None, true) => vec!["bunny"],
+        (None, false) => vec!["bunny", "spot", "bunny-1m"],
     };
     let mut rows = Vec::new();
-    for id in meshes {
+    for id in &meshes {
         let input = match *id {
             "spot" => crate::shared_assets()?.join("spot.obj"),
             _ => crate::e2e::mesh_file(id)?,
