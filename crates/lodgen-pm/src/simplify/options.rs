@@ -125,9 +125,9 @@ pub struct SimplifyOptions {
     /// Default value: `None` (opt in with `Some(DEFAULT_REACH_FACTOR)`):
     /// it lowers the error against the other simplifiers (`cargo xtask
     /// quality --quick --reach`: geometric mean of lodgen / best peer,
-    /// Hausdorff 1.172 → 1.012, RMS 1.055 → 1.032) but costs ~20 % more
-    /// CPU on the bunny (the reach test of every planned pair, and one
-    /// more pass), and raises three cells (docs/quality.md).
+    /// Hausdorff 1.172 → 1.012, RMS 1.055 → 1.032) but costs ~15–19 % more
+    /// simplification CPU on the bunny (the reach test of every planned
+    /// pair; docs/performance.md), and raises three cells (docs/quality.md).
     pub reach: Option<f64>,
 }
 

@@ -47,7 +47,9 @@ impl Simplifier {
             .opts
             .reach
             .map_or(f64::INFINITY, |f| self.pass.spread_limit * f * f);
-        let deferred = limit.is_finite() && limit > 0.0 && self.reach_over(v0, v1, p, limit);
+        let deferred = limit.is_finite()
+            && limit > 0.0
+            && self.reach_over(v0, v1, p, !removed.is_empty(), limit);
         Ok(Plan {
             v0,
             v1,

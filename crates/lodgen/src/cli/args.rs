@@ -94,7 +94,7 @@ pub struct BuildArgs {
     pub schedule: ScheduleMode,
 
     /// Lower Hausdorff error at the tips of thin parts (a tail, a horn, a
-    /// spout), for ~20 % more simplification time: each pass (schedule
+    /// spout), for ~15–19 % more simplification time: each pass (schedule
     /// "passes") also puts off a contraction that moves the surface farther
     /// than FACTOR × the pass's spread bound. Without a value: 1.1, the
     /// factor measured best over the quality table (docs/quality.md). Off
