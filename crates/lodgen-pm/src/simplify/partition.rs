@@ -177,15 +177,19 @@ impl Simplifier {
             l.s.locked = Vec::new();
             l.held = Vec::new();
         }
-        self.quadric = vec![Quadric::default(); nv];
-        for (v, q) in held {
-            self.quadric[v] = q;
-        }
+        // (zeroed pages, mapped as the write-back reaches them while it
+        // frees the clusters' copies: the whole mesh's arrays and the
+        // clusters' are never resident at once; the held vertices, spread
+        // over every page, come last)
+        self.quadric = zero_quadrics(nv);
         self.tris = vec![[0; 3]; nt];
         self.tri_alive = vec![false; nt];
         let mut done = Vec::with_capacity(locals.len());
         for (c, l) in locals.into_iter().enumerate() {
             done.push(self.write_back(l, c as u32, &home));
+        }
+        for (v, q) in held {
+            self.quadric[v] = q;
         }
         drop(home);
         self.merge_logs(&done);
@@ -465,6 +469,26 @@ fn walk(s: &mut Simplifier, held: &[bool], limit: f32) -> usize {
     before - s.live_tris
 }
 
+/// `n` zero (default) quadrics in a zeroed allocation, whose pages the
+/// system maps only when they are first written.
+fn zero_quadrics(n: usize) -> Vec<Quadric> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let layout = std::alloc::Layout::array::<Quadric>(n).expect("quadrics fit the address space");
+    // SAFETY: `Quadric` is plain f64 fields, for which all-zero bits are
+    // 0.0, i.e. `Quadric::default()` (test `zero_quadrics_are_default`);
+    // the block is allocated by the global allocator with the layout of
+    // `n` quadrics, as `Vec::from_raw_parts` requires for capacity `n`.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout).cast::<Quadric>();
+        if p.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Vec::from_raw_parts(p, n, n)
+    }
+}
+
 fn add_rejections(to: &mut Rejections, r: &Rejections) {
     to.locked += r.locked;
     to.link += r.link;
@@ -531,5 +555,23 @@ mod tests {
             }
             None => assert!(f.corners_implied),
         }
+    }
+
+    /// Fails if `Quadric` gains a field whose default is not all-zero bits.
+    #[test]
+    fn zero_quadrics_are_default() {
+        assert!(zero_quadrics(0).is_empty());
+        let q = zero_quadrics(1000);
+        assert_eq!(q, vec![Quadric::default(); 1000]);
+        let bits: Vec<u64> = [Quadric::default()]
+            .iter()
+            .flat_map(|q| {
+                [
+                    q.a2, q.ab, q.ac, q.ad, q.b2, q.bc, q.bd, q.c2, q.cd, q.d2, q.weight,
+                ]
+            })
+            .map(f64::to_bits)
+            .collect();
+        assert!(bits.iter().all(|&b| b == 0));
     }
 }
