@@ -161,13 +161,23 @@ pub fn build_one(
     build_mesh(index, &mut Cow::Borrowed(mesh), opts, progress)
 }
 
+/// The smallest mesh whose simplification may run partitioned (eight
+/// clusters of [`lodgen_pm::DEFAULT_CLUSTER_TRIANGLES`]), the one that leaves
+/// freed holes worth returning.
+const TRIM_MIN_TRIANGLES: usize = 8 * lodgen_pm::DEFAULT_CLUSTER_TRIANGLES;
+
 /// Give the pages the simplifier freed back to the system before the
 /// measurement builds its trees: glibc returns only the top of each heap
 /// by itself, and the partitioned simplification's clusters (small arrays
 /// made on every pool thread, freed between arrays that live on) leave
 /// holes that otherwise stay resident under the measurement's peak
-/// (bunny-4m whole run 940 → 898 MB).
-fn return_freed_memory() {
+/// (bunny-4m whole run 940 → 898 MB). Only after meshes of at least
+/// [`TRIM_MIN_TRIANGLES`]: a scene of many small meshes would pay a walk
+/// of the heaps per mesh for pages that do not matter.
+fn return_freed_memory(input_triangles: usize) {
+    if input_triangles < TRIM_MIN_TRIANGLES {
+        return;
+    }
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only releases free memory of glibc's heaps.
     unsafe {
@@ -195,7 +205,7 @@ fn build_mesh(
     let t_build = Instant::now();
     let mut simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
     let simplify_time = t_build.elapsed();
-    return_freed_memory();
+    return_freed_memory(input_triangles);
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
