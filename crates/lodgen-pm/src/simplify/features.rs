@@ -90,8 +90,10 @@ pub(crate) struct Features {
 pub(crate) type WedgeEdits = SmallVec<[(u32, [u32; 2]); 16]>;
 
 impl Features {
-    /// Border edges of `tris` as the first feature edges.
-    pub fn new(nv: usize, tris: &[[u32; 3]]) -> Features {
+    /// The border edges `borders` (`(a, b)`, `a < b`, sorted: the order
+    /// the neighbour lists are filled in) as the first feature edges.
+    /// `Simplifier::border_edges` finds them from the vertex fans.
+    pub fn with_borders(nv: usize, borders: &[(u32, u32)]) -> Features {
         let mut f = Features {
             nbrs: Nbrs::new(nv),
             kind: vec![Kind::Free; nv],
@@ -100,14 +102,18 @@ impl Features {
             vertex_wedge: None,
             edits_implied: false,
         };
-        let mut half = edge_uses(tris);
-        half.sort_unstable();
-        for run in half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
-            if run.len() == 1 {
-                f.add(run[0].0, run[0].1);
-            }
+        for &(a, b) in borders {
+            f.add(a, b);
         }
         f
+    }
+
+    /// Border edges of `tris` (edges of one use) as the first feature
+    /// edges, by sorting every edge: the reference `with_borders` is
+    /// checked against.
+    #[cfg(test)]
+    pub fn new(nv: usize, tris: &[[u32; 3]]) -> Features {
+        Features::with_borders(nv, &sorted_borders(tris))
     }
 
     /// The feature state of the vertices `verts` (global ids, increasing)
@@ -147,9 +153,10 @@ impl Features {
         true
     }
 
-    /// The interior edges across which the wedges of `wedges` differ
-    /// (there are none when [`vertex_wedges`] finds one wedge per vertex:
-    /// the caller skips this, which sorts every edge).
+    /// The interior edges across which the wedges of `wedges` differ, by
+    /// sorting every edge: the reference `Simplifier::seam_edges` is
+    /// checked against.
+    #[cfg(test)]
     pub fn seams(tris: &[[u32; 3]], wedges: &[[u32; 3]]) -> Vec<(u32, u32)> {
         let mut half = edge_uses(tris);
         half.sort_unstable();
@@ -441,6 +448,19 @@ fn sectors(fan: &[u32], tris: &[[u32; 3]], v0: u32, feature: &[u32]) -> SmallVec
 }
 
 /// Every triangle edge as `(min, max, triangle)`.
+/// The edges of one use in `tris`, `(a, b)`, `a < b`, sorted, by sorting
+/// every edge (the reference for `Simplifier::border_edges`).
+#[cfg(test)]
+pub(crate) fn sorted_borders(tris: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut half = edge_uses(tris);
+    half.sort_unstable();
+    half.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .filter(|run| run.len() == 1)
+        .map(|run| (run[0].0, run[0].1))
+        .collect()
+}
+
+#[cfg(test)]
 fn edge_uses(tris: &[[u32; 3]]) -> Vec<(u32, u32, u32)> {
     let mut half = Vec::with_capacity(3 * tris.len());
     for (i, t) in tris.iter().enumerate() {

@@ -284,7 +284,7 @@ impl Simplifier {
         let vertex_wedge = features::vertex_wedges(&self.tris, &wedges);
         let seams = match vertex_wedge {
             Some(_) => Vec::new(),
-            None => Features::seams(&self.tris, &wedges),
+            None => self.seam_edges(&wedges),
         };
         self.add_features(&seams);
         // one wedge per vertex and no attribute term (which reads corner
