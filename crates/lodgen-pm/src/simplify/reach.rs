@@ -7,54 +7,24 @@ use crate::mesh::adjacency::FanLookup;
 use crate::metric::bvh::{closest_point_on_triangle, distance_squared};
 use glam::DVec3;
 
-/// A triangle prepared for [`Face::over`] (several points are tested
-/// against one face).
-struct Face {
-    a: DVec3,
-    e0: DVec3,
-    e1: DVec3,
-    n: DVec3,
-    /// `|n|²`
-    nn: f64,
-    d00: f64,
-    d01: f64,
-    d11: f64,
-}
-
-impl Face {
-    #[inline]
-    fn new([a, b, c]: [DVec3; 3]) -> Self {
-        let (e0, e1) = (b - a, c - a);
-        let n = e0.cross(e1);
-        Face {
-            a,
-            e0,
-            e1,
-            n,
-            nn: n.length_squared(),
-            d00: e0.dot(e0),
-            d01: e0.dot(e1),
-            d11: e1.dot(e1),
-        }
+/// Whether the origin (the query point) lies over the triangle `a b c`
+/// (given relative to it: its projection inside, by barycentric
+/// coordinates) within `limit` (squared) of its plane: the cheap test,
+/// which settles nearly every query (a sufficient condition for the
+/// distance; never on a degenerate triangle). With `n` the triangle's
+/// normal and `m = a × n`, the barycentric coordinates of `b` and `c`
+/// times `|n|²` are `c·m` and `−b·m` (`n·(c × a)` and `n·(a × b)`).
+#[inline]
+fn over(a: DVec3, b: DVec3, c: DVec3, limit: f64) -> bool {
+    let n = (b - a).cross(c - a);
+    let nn = n.length_squared();
+    let s = n.dot(a);
+    if nn <= 0.0 || s * s > limit * nn {
+        return false;
     }
-
-    /// Whether `q` lies over the triangle (its projection inside, by
-    /// barycentric coordinates) within `limit` (squared) of its plane: the
-    /// cheap test, which settles nearly every query (a sufficient
-    /// condition for the distance; never on a degenerate triangle).
-    #[inline]
-    fn over(&self, q: DVec3, limit: f64) -> bool {
-        let w = q - self.a;
-        let s = self.n.dot(w);
-        if self.nn <= 0.0 || s * s > limit * self.nn {
-            return false;
-        }
-        let (d20, d21) = (w.dot(self.e0), w.dot(self.e1));
-        // (u, v: the barycentric coordinates of b and c, times nn)
-        let u = self.d11 * d20 - self.d01 * d21;
-        let v = self.d00 * d21 - self.d01 * d20;
-        u >= 0.0 && v >= 0.0 && u + v <= self.d00 * self.d11 - self.d01 * self.d01
-    }
+    let m = a.cross(n);
+    let (u, v) = (c.dot(m), -b.dot(m));
+    u >= 0.0 && v >= 0.0 && u + v <= nn
 }
 
 /// The squared distance from `q` to the segment `[a, b]`.
@@ -98,14 +68,15 @@ impl Simplifier {
         // always: first `v0`'s fan for `p0` (and `p`), then `v1`'s for
         // `p1` (and `p`), each walk stopping once its queries are settled;
         // then the other fans for what is still open (rare).
-        let (q, pos) = ([p0, p1, p], [v0, v1]);
-        self.settle(pos, 0, q, [true, false, true], limit, &mut open);
-        self.settle(pos, 1, q, [false, true, true], limit, &mut open);
+        let (q, v) = ([p0, p1, p], [v0, v1]);
+        let ask = |k: usize, open: bool| open.then_some(k);
+        (open[0], open[2]) = self.settle(v, 0, q, (ask(0, open[0]), open[2]), limit);
+        (open[1], open[2]) = self.settle(v, 1, q, (ask(1, open[1]), open[2]), limit);
         if open[0] {
-            self.settle(pos, 1, q, [true, false, false], limit, &mut open);
+            open[0] = self.settle(v, 1, q, (Some(0), false), limit).0;
         }
         if open[1] {
-            self.settle(pos, 0, q, [false, true, false], limit, &mut open);
+            open[1] = self.settle(v, 0, q, (Some(1), false), limit).0;
         }
         let exact = |q: DVec3, moved: Option<DVec3>| {
             self.any_face([v0, v1], moved, |[a, b, c]| {
@@ -119,57 +90,52 @@ impl Simplifier {
             || (open[2] && !exact(p, None))
     }
 
-    /// Walk the fan of `v[i]` with the cheap test ([`Face::over`]) for the
-    /// queries `k` that are `open` and `asked`: `q[0]`, `q[1]` (the old
-    /// positions) against the moved faces, `q[2]` (the new one) against
-    /// the old ones; each shared face is walked in `v[0]`'s fan only.
-    /// Stops once those queries are settled.
+    /// Walk the fan of `v[i]` with the cheap test ([`over`]) for the open
+    /// queries among `old` (`q[old]`, an old position, against the moved
+    /// faces) and `new` (`q[2]`, the new position, against the old
+    /// faces); each shared face is walked in `v[0]`'s fan only. Stops once
+    /// those queries are settled; returns which are still open.
     fn settle(
         &self,
         v: [u32; 2],
         i: usize,
         q: [DVec3; 3],
-        asked: [bool; 3],
+        (mut old, mut new): (Option<usize>, bool),
         limit: f64,
-        open: &mut [bool; 3],
-    ) {
-        let wanted = |open: &[bool; 3]| (0..3).any(|k| open[k] && asked[k]);
-        if !wanted(open) {
-            return;
-        }
-        let (c, other) = (v[i], v[1 - i]);
+    ) -> (bool, bool) {
+        // (`q[i]` is the old position of the fan's centre)
+        let (c, other, apex, p) = (v[i], v[1 - i], q[i], q[2]);
+        let x = q[old.unwrap_or(0)];
         for &t in self.vtris.fan(c) {
+            if old.is_none() && !new {
+                break;
+            }
             if !self.tri_alive[t as usize] {
                 continue;
             }
-            let tri = self.tris[t as usize];
+            // the face's two other corners, in its order
+            let [a, b, e] = self.tris[t as usize];
+            let (y, z) = if a == c {
+                (b, e)
+            } else if b == c {
+                (e, a)
+            } else {
+                (a, b)
+            };
             // (a shared face is in both fans, and deleted when moved)
-            let shared = tri.contains(&other);
+            let shared = y == other || z == other;
             if shared && i == 1 {
                 continue;
             }
-            let old = tri.map(|x| dv(self.pos[x as usize]));
-            if open[2] && asked[2] && Face::new(old).over(q[2], limit) {
-                open[2] = false;
+            let (b, e) = (dv(self.pos[y as usize]), dv(self.pos[z as usize]));
+            if new && over(apex - p, b - p, e - p, limit) {
+                new = false;
             }
-            if !shared && ((open[0] && asked[0]) || (open[1] && asked[1])) {
-                let mut moved = old;
-                for (k, &x) in tri.iter().enumerate() {
-                    if x == c {
-                        moved[k] = q[2];
-                    }
-                }
-                let face = Face::new(moved);
-                for k in 0..2 {
-                    if open[k] && asked[k] && face.over(q[k], limit) {
-                        open[k] = false;
-                    }
-                }
-            }
-            if !wanted(open) {
-                return;
+            if old.is_some() && !shared && over(p - x, b - x, e - x, limit) {
+                old = None;
             }
         }
+        (old.is_some(), new)
     }
 
     /// Whether `f` holds for one of the live faces of the fans of `v` (the
