@@ -119,13 +119,14 @@ pub struct SimplifyOptions {
     /// [`Schedule::Passes`]: also defer to a later pass a contraction that
     /// moves the surface farther than this factor × the pass's spread bound
     /// (the old position of either vertex from every face it moves, or the
-    /// new position from every face of the old fans): the quadric cost
+    /// new position from every face of the old fans; tested only on pairs
+    /// whose error² is at least 0.1 × the limit): the quadric cost
     /// underrates contractions at the tips of thin parts (a tail, a horn,
     /// a spout), whose faces are nearly parallel to the way the tip moves.
     /// Default value: `None` (opt in with `Some(DEFAULT_REACH_FACTOR)`):
     /// it lowers the error against the other simplifiers (`cargo xtask
     /// quality --quick --reach`: geometric mean of lodgen / best peer,
-    /// Hausdorff 1.172 → 1.012, RMS 1.055 → 1.032) but costs ~15–19 % more
+    /// Hausdorff 1.179 → 1.014, RMS 1.055 → 1.027) but costs ~14 % more
     /// simplification CPU on the bunny (the reach test of every planned
     /// pair; docs/performance.md), and raises three cells (docs/quality.md).
     pub reach: Option<f64>,

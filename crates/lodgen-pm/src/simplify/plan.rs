@@ -4,6 +4,7 @@
 //! closed one-rings of the pair (what the batched walk relies on).
 
 use super::legality::{link, moved_faces_ok, Faces, Link};
+use super::reach::REACH_GATE;
 use super::{dv, Plan, Rejected, Simplifier};
 use crate::mesh::adjacency::FanLookup;
 use crate::util::prefetch;
@@ -49,6 +50,7 @@ impl Simplifier {
             .map_or(f64::INFINITY, |f| self.pass.spread_limit * f * f);
         let deferred = limit.is_finite()
             && limit > 0.0
+            && error * error >= REACH_GATE * limit
             && self.reach_over(v0, v1, p, !removed.is_empty(), limit);
         Ok(Plan {
             v0,
