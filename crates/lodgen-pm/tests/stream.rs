@@ -465,9 +465,27 @@ fn assert_same_corner_values(
 
 #[test]
 fn wedged_stream_replays_every_corner_attribute_exactly() {
-    for (grouped, exact) in [(false, false), (true, false), (false, true)] {
-        let (pm, attrs) = wedged(3, grouped, 24);
+    let cases = [
+        (false, false, false),
+        (true, false, false),
+        (false, true, false),
+        (false, false, true),
+    ];
+    for (grouped, exact, shifted) in cases {
+        let (pm, mut attrs) = wedged(3, grouped, 24);
         assert!(pm.len() > 200);
+        // `shifted`: UVs spread over [-0.5, 1.5] (leaving [0, 1], as spot's
+        // do), stored as unorm16 over their range
+        let stride = attrs.stride();
+        if shifted {
+            for w in attrs.values.chunks_exact_mut(stride) {
+                for x in &mut w[3..5] {
+                    *x = *x * 2.0 - 0.5;
+                }
+            }
+        }
+        let uvs = || attrs.values.chunks_exact(stride).flat_map(|w| [w[3], w[4]]);
+        let (lo, hi) = uvs().fold((f32::MAX, f32::MIN), |(l, h), x| (l.min(x), h.max(x)));
         let levels = [pm.len(), pm.len() / 3, 0];
         let opts = EncodeOptions::DEFAULT.with_exact_attributes(exact);
         let bytes = encode_with_attributes(&pm, &levels, opts, &attrs).unwrap();
@@ -481,6 +499,38 @@ fn wedged_stream_replays_every_corner_attribute_exactly() {
         // `--quantize` writes them; or exact f32
         let want = if exact {
             vec![AttrEncoding::F32; 2]
+        } else if shifted {
+            let AttrEncoding::Unorm16Range(r) = layout.encodings[1] else {
+                panic!("shifted UVs as {:?}", layout.encodings[1]);
+            };
+            // the range is the values' span: from the least, just reaching
+            // the greatest
+            assert!(lo < 0.0 && hi > 1.0, "{lo} {hi}");
+            assert_eq!(r.offset, lo);
+            assert!(f64::from(r.offset) + f64::from(r.scale) >= f64::from(hi));
+            let below = f32::from_bits(r.scale.to_bits() - 1);
+            assert!(f64::from(r.offset) + f64::from(below) < f64::from(hi));
+            // within half a step of 1/65535 of the range
+            for x in uvs() {
+                let e = layout.encodings[1];
+                let err = (f64::from(e.round_trip(x)) - f64::from(x)).abs();
+                assert!(
+                    err <= f64::from(r.scale) / 65535.0 * 0.5 + 1e-7,
+                    "{x}: {err}"
+                );
+            }
+            // a header whose range is not finite or not positive is refused
+            let mut key = vec![4u8];
+            key.extend(r.offset.to_le_bytes());
+            key.extend(r.scale.to_le_bytes());
+            let at = bytes.windows(9).position(|w| w == key).expect("the range") + 5;
+            for bad in [0.0f32, -1.0, f32::NAN, f32::INFINITY] {
+                let mut b = bytes.clone();
+                b[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+                let e = decode_header(&b).expect_err("a bad range");
+                assert!(e.to_string().contains("attribute range"), "{e}");
+            }
+            vec![AttrEncoding::Snorm8, AttrEncoding::Unorm16Range(r)]
         } else {
             vec![AttrEncoding::Snorm8, AttrEncoding::Unorm16]
         };

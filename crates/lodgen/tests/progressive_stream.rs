@@ -91,8 +91,9 @@ fn every_level_of_a_quantized_file_replays_exactly_from_its_stream() {
 
 /// spot.obj (UVs): every corner of the finest level replayed from the
 /// stream has the file level's grid point and texture coordinate (through
-/// the channel's encoding: spot's UVs leave [0, 1], so exact `f32`, as
-/// `--quantize` keeps them), and every level the file's triangles.
+/// the channel's encoding: spot's UVs leave [0, 1], so unorm16 over their
+/// range, within half a step of the file's `f32`), and every level the
+/// file's triangles.
 #[test]
 fn the_finest_level_of_a_textured_file_replays_its_attributes_exactly() {
     let Some(spot) = lodgen::assets::shared_asset("spot.obj") else {
@@ -128,7 +129,11 @@ fn the_finest_level_of_a_textured_file_replays_its_attributes_exactly() {
             .iter()
             .position(|c| c.name == "TEXCOORD_0")
             .unwrap()];
-        assert_eq!(enc, lodgen_pm::stream::AttrEncoding::F32);
+        // spot's UVs leave [0, 1] (from −0.052): unorm16 over their range
+        let lodgen_pm::stream::AttrEncoding::Unorm16Range(r) = enc else {
+            panic!("spot's UVs as {enc:?}");
+        };
+        assert!(r.offset < 0.0 && r.scale > 1.0, "{r:?}");
         ((d, a, at, enc), n)
     };
     let (d, a, at, enc) = uv;
@@ -142,6 +147,14 @@ fn the_finest_level_of_a_textured_file_replays_its_attributes_exactly() {
         let with_uv = k == 0;
         let corner = |q: [u16; 3], uv: [f32; 2]| {
             let uv = if with_uv {
+                let step = match enc {
+                    lodgen_pm::stream::AttrEncoding::Unorm16Range(r) => r.scale / 65535.0,
+                    _ => 0.0,
+                };
+                for x in uv {
+                    let err = (enc.round_trip(x) - x).abs();
+                    assert!(err <= step * 0.5 + 1e-7, "UV {x}: off by {err}");
+                }
                 uv.map(|x| enc.round_trip(x).to_bits())
             } else {
                 [0; 2]

@@ -1,4 +1,4 @@
-// LODGEN_progressive stream decoder (layout version 4, docs/LODGEN_progressive.md),
+// LODGEN_progressive stream decoder (layout version 5, docs/LODGEN_progressive.md),
 // a second, independent implementation of crates/lodgen-pm/src/progressive/stream/.
 // Used by the `lodgen view` page (viewer.js) and the three.js loader
 // (three/index.js). The columns are decoded by meshoptimizer's
@@ -20,10 +20,12 @@
 
 const FACE_ESCAPE = 255;
 const NONE = 0xffffffff;
-// attribute encodings: 0 f32, 1 unorm16, 2 snorm8, 3 unorm8
-const ENC_MAX = [0, 65535, 254, 255];
-function dequantize(e, q) {
-  return Math.fround(e === 1 ? q / 65535 : e === 2 ? (q - 127) / 127 : q / 255);
+// attribute encodings: 0 f32, 1 unorm16, 2 snorm8, 3 unorm8, 4 unorm16 over
+// offset ..= offset + scale (c.offset0, c.scale)
+const ENC_MAX = [0, 65535, 254, 255, 65535];
+function dequantize(c, q) {
+  const e = c.encoding;
+  return Math.fround(e === 1 ? q / 65535 : e === 2 ? (q - 127) / 127 : e === 3 ? q / 255 : c.offset0 + c.scale * (q / 65535));
 }
 const RING_CODES = 42;
 const PERMS = [[0, 1, 2], [1, 2, 0], [2, 0, 1], [1, 0, 2], [0, 2, 1], [2, 1, 0]];
@@ -59,6 +61,12 @@ class Bytes {
     if (v > limit) throw new Error(`byte ${at}: ${what} ${v} exceeds ${limit}`);
     return v;
   }
+  f32() {
+    if (this.pos + 4 > this.b.length) throw new NeedMore();
+    const v = new DataView(this.b.buffer, this.b.byteOffset + this.pos, 4).getFloat32(0, true);
+    this.pos += 4;
+    return v;
+  }
   f64() {
     if (this.pos + 8 > this.b.length) throw new NeedMore();
     const v = new DataView(this.b.buffer, this.b.byteOffset + this.pos, 8).getFloat64(0, true);
@@ -72,7 +80,7 @@ export function parseHeader(bytes) {
   const r = new Bytes(bytes, 0, 0);
   for (const m of [0x4c, 0x47, 0x50, 0x4d]) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
   const version = r.byte();
-  if (version !== 4) throw new Error(`unsupported stream version ${version}`);
+  if (version !== 5) throw new Error(`unsupported stream version ${version}`);
   const flags = r.byte();
   if (flags & ~3) throw new Error(`unknown flags ${flags}`);
   const bits = r.byte();
@@ -117,7 +125,14 @@ export function parseHeader(bytes) {
     let qstride = 0, fstride = 0;
     for (const c of channels) {
       c.encoding = r.byte();
-      if (c.encoding > 3) throw new Error(`unknown attribute encoding ${c.encoding}`);
+      if (c.encoding > 4) throw new Error(`unknown attribute encoding ${c.encoding}`);
+      if (c.encoding === 4) {
+        c.offset0 = r.f32();
+        c.scale = r.f32();
+        if (!Number.isFinite(c.offset0) || !Number.isFinite(c.scale) || !(c.scale > 0)) {
+          throw new Error(`attribute range offset ${c.offset0} scale ${c.scale} (finite, scale > 0)`);
+        }
+      }
       if (c.encoding === 0) { c.flane = fstride; fstride += c.components; }
       else { c.qlane = qstride; qstride += c.components; c.padded = c.components + (c.components & 1); }
     }
@@ -648,7 +663,7 @@ export class StreamDecoder {
             const q = (qp[c.qlane + j] + values[ci][k * c.padded + j]) & 0xffff;
             if (q > ENC_MAX[c.encoding]) throw new Error(`attribute value ${q} over ${ENC_MAX[c.encoding]}`);
             dec.qv[id * qs + c.qlane + j] = q;
-            dec.wvals[out + j] = dequantize(c.encoding, q);
+            dec.wvals[out + j] = dequantize(c, q);
           }
         }
       });

@@ -3,7 +3,7 @@
 
 use super::columns::put_varint;
 use super::types::{
-    invalid, AttrEncoding, Channel, ChunkInfo, Grid, StreamError, StreamHeader, WedgeLayout,
+    invalid, AttrEncoding, Channel, ChunkInfo, Grid, Range, StreamError, StreamHeader, WedgeLayout,
     FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
 };
 
@@ -41,6 +41,10 @@ pub(super) fn write(h: &StreamHeader) -> Vec<u8> {
         }
         for e in &layout.encodings {
             out.push(e.code());
+            if let AttrEncoding::Unorm16Range(r) = e {
+                out.extend_from_slice(&r.offset.to_le_bytes());
+                out.extend_from_slice(&r.scale.to_le_bytes());
+            }
         }
     }
     put_varint(&mut out, h.chunks.len() as u64);
@@ -82,6 +86,14 @@ impl Reader<'_> {
             *x = self.byte()?;
         }
         Ok(f64::from_le_bytes(b))
+    }
+
+    fn f32(&mut self) -> Result<f32, ReadError> {
+        let mut b = [0u8; 4];
+        for x in &mut b {
+            *x = self.byte()?;
+        }
+        Ok(f32::from_le_bytes(b))
     }
 
     fn varint(&mut self) -> Result<u64, ReadError> {
@@ -167,8 +179,24 @@ fn parse_wedges(r: &mut Reader, max: u64) -> Result<WedgeLayout, ReadError> {
     for _ in 0..n {
         let at = r.pos;
         let code = r.byte()?;
+        let mut range = Range {
+            offset: 0.0,
+            scale: 1.0,
+        };
+        if code == 4 {
+            let at = r.pos;
+            let [offset, scale] = [r.f32()?, r.f32()?];
+            range = Range { offset, scale };
+            if !range.valid() {
+                return Err(invalid(
+                    at,
+                    format!("attribute range offset {offset} scale {scale} (finite, scale > 0)"),
+                )
+                .into());
+            }
+        }
         encodings.push(
-            AttrEncoding::from_code(code)
+            AttrEncoding::from_code(code, range)
                 .ok_or_else(|| invalid(at, format!("unknown attribute encoding {code}")))?,
         );
     }

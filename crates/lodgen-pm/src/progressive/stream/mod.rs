@@ -3,7 +3,7 @@
 //! normative description of the layout; this module is its reference
 //! implementation).
 //!
-//! Layout (version 4), in short: a header (grid, counts, level table, wedge
+//! Layout (version 5), in short: a header (grid, counts, level table, wedge
 //! table, chunk table), then one **chunk** per step of the level chain: the
 //! base mesh, then the records up to each level's count, coarse → fine. A
 //! chunk is a sequence of **columns** (one per kind of value: split vertex,
@@ -43,7 +43,7 @@ pub use decode::{decode, decode_header, decode_with_attributes, Decoded, StreamD
 pub use encode::{encode, encode_with_attributes};
 pub use stats::{column_stats, ColumnStat};
 pub use types::{
-    AttrEncoding, Channel, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamError, StreamHeader,
-    WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS, MAX_CHANNEL_NAME,
-    MAX_COMPONENTS, VERSION,
+    AttrEncoding, Channel, ChunkInfo, EncodeError, EncodeOptions, Grid, Range, StreamError,
+    StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS,
+    MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
 };

@@ -7,7 +7,7 @@ use thiserror::Error;
 /// The four bytes every stream starts with.
 pub const MAGIC: [u8; 4] = *b"LGPM";
 /// The layout version this module writes and reads.
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 /// Header flag: the stream stores every record's `error` (`f32`).
 pub const FLAG_ERRORS: u8 = 1;
 /// Header flag: the stream carries wedges (attributes per corner): a wedge
@@ -283,7 +283,9 @@ impl WedgeAttributes {
 /// How a channel's values are stored: exact `f32`, or the normalized
 /// integers lodgen's `--quantize` writes in glTF (`KHR_mesh_quantization`),
 /// decoded as the glTF spec dequantizes them (`q / 65535`, `q / 127`,
-/// `q / 255`, each computed in `f64` and rounded once to `f32`).
+/// `q / 255`, each computed in `f64` and rounded once to `f32`), or unorm16
+/// over a stated range (`offset + scale · q / 65535`, the
+/// `KHR_texture_transform` way).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AttrEncoding {
     /// Exact `f32` (code 0).
@@ -296,6 +298,51 @@ pub enum AttrEncoding {
     Snorm8,
     /// Unsigned normalized 8-bit, values in [0, 1] (code 3): colours.
     Unorm8,
+    /// Unsigned 16-bit over `offset ..= offset + scale` (code 4, followed in
+    /// the header by `offset` and `scale` as little-endian `f32`): texture
+    /// coordinates that leave [0, 1].
+    Unorm16Range(Range),
+}
+
+/// The span of a [`AttrEncoding::Unorm16Range`] channel: every component's
+/// values lie in `offset ..= offset + scale` (`scale` finite, > 0).
+#[derive(Clone, Copy, Debug)]
+pub struct Range {
+    pub offset: f32,
+    pub scale: f32,
+}
+
+impl PartialEq for Range {
+    fn eq(&self, o: &Range) -> bool {
+        self.offset.to_bits() == o.offset.to_bits() && self.scale.to_bits() == o.scale.to_bits()
+    }
+}
+
+impl Eq for Range {}
+
+impl Range {
+    /// The smallest range (in `f32`) holding every value, or `None` when a
+    /// value is not finite or all are equal.
+    pub fn around(values: impl Iterator<Item = f32>) -> Option<Range> {
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for x in values {
+            if !x.is_finite() {
+                return None;
+            }
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+        let mut scale = (f64::from(hi) - f64::from(lo)) as f32;
+        while f64::from(lo) + f64::from(scale) < f64::from(hi) {
+            scale = f32::from_bits(scale.to_bits() + 1);
+        }
+        (lo <= hi && scale > 0.0 && scale.is_finite()).then_some(Range { offset: lo, scale })
+    }
+
+    /// Whether a header may hold it.
+    pub fn valid(self) -> bool {
+        self.offset.is_finite() && self.scale.is_finite() && self.scale > 0.0
+    }
 }
 
 impl AttrEncoding {
@@ -305,34 +352,41 @@ impl AttrEncoding {
             AttrEncoding::Unorm16 => 1,
             AttrEncoding::Snorm8 => 2,
             AttrEncoding::Unorm8 => 3,
+            AttrEncoding::Unorm16Range(_) => 4,
         }
     }
 
-    pub fn from_code(code: u8) -> Option<AttrEncoding> {
+    /// The encoding of `code` (for code 4 with `range`); `None` when unknown.
+    pub fn from_code(code: u8, range: Range) -> Option<AttrEncoding> {
         Some(match code {
             0 => AttrEncoding::F32,
             1 => AttrEncoding::Unorm16,
             2 => AttrEncoding::Snorm8,
             3 => AttrEncoding::Unorm8,
+            4 => AttrEncoding::Unorm16Range(range),
             _ => return None,
         })
     }
 
-    /// What lodgen's `--quantize` writes for a glTF attribute `name` whose
-    /// values are `values`: `NORMAL` / `TANGENT` snorm8, `TEXCOORD_n`
-    /// unorm16 and `COLOR_n` unorm8 when every value is in [0, 1]; else (and
-    /// for joints and weights) `f32`.
-    pub fn choose(name: &str, mut values: impl Iterator<Item = f32>) -> AttrEncoding {
+    /// How the stream stores glTF attribute `name` whose values are
+    /// `values`: what lodgen's `--quantize` writes (`NORMAL` / `TANGENT`
+    /// snorm8, `TEXCOORD_n` unorm16 and `COLOR_n` unorm8 when every value is
+    /// in [0, 1]), a `TEXCOORD_n` leaving [0, 1] unorm16 over its range;
+    /// else (and for joints and weights) `f32`.
+    pub fn choose(name: &str, values: impl Iterator<Item = f32> + Clone) -> AttrEncoding {
         let unit = |x: f32| (0.0..=1.0).contains(&x);
         if name == "NORMAL" || name == "TANGENT" {
-            if values.all(f32::is_finite) {
+            if values.clone().all(f32::is_finite) {
                 return AttrEncoding::Snorm8;
             }
         } else if name.starts_with("TEXCOORD_") {
-            if values.all(unit) {
+            if values.clone().all(unit) {
                 return AttrEncoding::Unorm16;
             }
-        } else if name.starts_with("COLOR_") && values.all(unit) {
+            if let Some(r) = Range::around(values) {
+                return AttrEncoding::Unorm16Range(r);
+            }
+        } else if name.starts_with("COLOR_") && values.clone().all(unit) {
             return AttrEncoding::Unorm8;
         }
         AttrEncoding::F32
@@ -342,7 +396,7 @@ impl AttrEncoding {
     pub(super) fn max(self) -> u16 {
         match self {
             AttrEncoding::F32 => 0,
-            AttrEncoding::Unorm16 => u16::MAX,
+            AttrEncoding::Unorm16 | AttrEncoding::Unorm16Range(_) => u16::MAX,
             AttrEncoding::Snorm8 => 254,
             AttrEncoding::Unorm8 => 255,
         }
@@ -357,6 +411,10 @@ impl AttrEncoding {
             AttrEncoding::Unorm16 => (x * 65535.0).round().clamp(0.0, 65535.0) as u16,
             AttrEncoding::Snorm8 => ((x * 127.0).round().clamp(-127.0, 127.0) + 127.0) as u16,
             AttrEncoding::Unorm8 => (x * 255.0).round().clamp(0.0, 255.0) as u16,
+            AttrEncoding::Unorm16Range(r) => ((x - f64::from(r.offset)) / f64::from(r.scale)
+                * 65535.0)
+                .round()
+                .clamp(0.0, 65535.0) as u16,
         }
     }
 
@@ -368,6 +426,9 @@ impl AttrEncoding {
             AttrEncoding::Unorm16 => q / 65535.0,
             AttrEncoding::Snorm8 => (q - 127.0) / 127.0,
             AttrEncoding::Unorm8 => q / 255.0,
+            AttrEncoding::Unorm16Range(r) => {
+                f64::from(r.offset) + f64::from(r.scale) * (q / 65535.0)
+            }
         }) as f32
     }
 
