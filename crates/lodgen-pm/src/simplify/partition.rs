@@ -84,6 +84,14 @@ const MAX_ROUNDS: usize = 16;
 /// A vertex interior to no cluster (held, or in no triangle).
 const HELD: u32 = u32::MAX;
 
+/// Quadrics are handed to the clusters in blocks of this many vertices
+/// (5.8 MB), each freed after the last cluster that reads it.
+const BLOCK: usize = 1 << 16;
+
+/// Clusters built at once (in parallel): the whole mesh's blocks are freed
+/// between batches.
+const BATCH: usize = 16;
+
 /// A simplified cluster: its numbering and its simplifier after the run.
 struct Local {
     /// Local vertex → global vertex (increasing, so ties between pairs of
@@ -142,20 +150,14 @@ impl Simplifier {
         // read again before they are rebuilt at the end, and freeing them
         // first keeps them off the peak of the clusters' construction)
         self.vtris = Fans::default();
-        let this = &*self;
-        let mut locals: Vec<Local> = (0..nt.div_ceil(size) as u32)
-            .into_par_iter()
-            .map(|c| this.cluster(c, size, &home))
-            .collect();
-        // Memory: the clusters hold the triangles and the interior
-        // vertices' quadrics now; the whole mesh's are rebuilt from theirs.
+        // Memory: the clusters take the triangles and the interior
+        // vertices' quadrics; the whole mesh's are rebuilt from theirs.
         let nv = self.pos.len();
         let held: Vec<(usize, Quadric)> = (0..nv)
             .filter(|&v| home[v] == HELD)
             .map(|v| (v, self.quadric[v]))
             .collect();
-        self.quadric = Vec::new();
-        self.tris = Vec::new();
+        let mut locals = self.clusters(size, &home);
         self.tri_alive = Vec::new();
         let stop = (KEEP * nt as f64) as usize;
         let mut live = self.live_tris;
@@ -198,6 +200,50 @@ impl Simplifier {
         self.vtris = Fans::new(nv, &self.tris, |t| alive[t]);
     }
 
+    /// The clusters of `size` triangles, built a batch at a time from the
+    /// whole mesh's triangles and quadrics, which they consume: each
+    /// cluster takes its own run of triangles (split off the whole mesh's
+    /// array from its end, so the array shrinks as the pieces are made),
+    /// and a block of quadrics is freed once the last cluster with a
+    /// corner in it is built. So the whole mesh's copies and the
+    /// clusters' are never resident at once (bunny-4m: 196 MB of
+    /// quadrics, 53 MB of triangles).
+    fn clusters(&mut self, size: usize, home: &[u32]) -> Vec<Local> {
+        let own = into_pieces(std::mem::take(&mut self.tris), size);
+        let nc = own.len();
+        // the last cluster with a corner in each block of quadrics
+        let mut last = vec![0usize; self.pos.len().div_ceil(BLOCK)];
+        for (c, tris) in own.iter().enumerate() {
+            for &v in tris.iter().flatten() {
+                last[v as usize / BLOCK] = c;
+            }
+        }
+        let mut quads: Vec<Option<Vec<Quadric>>> =
+            into_pieces(std::mem::take(&mut self.quadric), BLOCK)
+                .into_iter()
+                .map(Some)
+                .collect();
+        let mut own = own.into_iter();
+        let mut locals: Vec<Local> = Vec::with_capacity(nc);
+        while locals.len() < nc {
+            let first = locals.len();
+            let batch: Vec<Vec<[u32; 3]>> = own.by_ref().take(BATCH).collect();
+            let (this, q) = (&*self, &quads);
+            locals.par_extend(
+                batch
+                    .into_par_iter()
+                    .enumerate()
+                    .map(|(i, tris)| this.cluster((first + i) as u32, size, tris, home, q)),
+            );
+            for (b, block) in quads.iter_mut().enumerate() {
+                if last[b] < locals.len() {
+                    *block = None;
+                }
+            }
+        }
+        locals
+    }
+
     /// Each vertex's cluster if all its triangles are in one, else `HELD`.
     fn homes(&self, size: usize) -> Vec<u32> {
         (0..self.pos.len() as u32)
@@ -212,18 +258,26 @@ impl Simplifier {
             .collect()
     }
 
-    /// Cluster `c` (triangles `c·size..`) as a simplifier of its own.
-    fn cluster(&self, c: u32, size: usize, home: &[u32]) -> Local {
+    /// Cluster `c` (triangles `c·size..`, `own`) as a simplifier of its
+    /// own, its quadrics read from the blocks `quads`.
+    fn cluster(
+        &self,
+        c: u32,
+        size: usize,
+        mut own: Vec<[u32; 3]>,
+        home: &[u32],
+        quads: &[Option<Vec<Quadric>>],
+    ) -> Local {
         let start = c as usize * size;
-        let end = (start + size).min(self.tris.len());
-        let own = &self.tris[start..end];
         let mut verts: Vec<u32> = own.iter().flatten().copied().collect();
         verts.sort_unstable();
         verts.dedup();
         let local = |g: u32| verts.binary_search(&g).map_or(u32::MAX, |i| i as u32);
-        let tris: Vec<[u32; 3]> = own.iter().map(|t| t.map(local)).collect();
+        for t in &mut own {
+            *t = t.map(local);
+        }
         let held: Vec<bool> = verts.iter().map(|&g| home[g as usize] != c).collect();
-        let s = self.local(&verts, tris, &held);
+        let s = self.local(&verts, own, &held, quads);
         Local {
             verts,
             start: start as u32,
@@ -234,18 +288,28 @@ impl Simplifier {
     }
 
     /// A simplifier over the vertices `verts` (global ids) and `tris`
-    /// (local ids) with this one's quadrics and flags, the `held` ones
-    /// locked.
-    fn local(&self, verts: &[u32], tris: Vec<[u32; 3]>, held: &[bool]) -> Simplifier {
+    /// (local ids) with this one's flags and the quadrics of `quads`
+    /// (blocks of `BLOCK` vertices), the `held` ones locked.
+    fn local(
+        &self,
+        verts: &[u32],
+        tris: Vec<[u32; 3]>,
+        held: &[bool],
+        quads: &[Option<Vec<Quadric>>],
+    ) -> Simplifier {
         let nv = verts.len();
         let nt = tris.len();
         let get = |g: &u32| *g as usize;
+        let quadric = |g: &u32| {
+            let block = quads[get(g) / BLOCK].as_ref();
+            block.expect("a block of quadrics outlives its last cluster")[get(g) % BLOCK]
+        };
         let vtris = Fans::new(nv, &tris, |_| true);
         Simplifier {
             opts: self.opts,
             target: 0,
             pos: verts.iter().map(|g| self.pos[get(g)]).collect(),
-            quadric: verts.iter().map(|g| self.quadric[get(g)]).collect(),
+            quadric: verts.iter().map(quadric).collect(),
             tris,
             tri_alive: vec![true; nt],
             vtris,
@@ -467,6 +531,21 @@ fn walk(s: &mut Simplifier, held: &[bool], limit: f32) -> usize {
         }
     }
     before - s.live_tris
+}
+
+/// `v` cut into pieces of `size` elements (the last one shorter), with
+/// at most one piece's worth of memory above `v`'s: the pieces are split
+/// off the end and the rest shrunk in place each time (glibc reallocates
+/// a large block smaller by unmapping its tail).
+fn into_pieces<T>(mut v: Vec<T>, size: usize) -> Vec<Vec<T>> {
+    let n = v.len().div_ceil(size);
+    let mut pieces = Vec::with_capacity(n);
+    for p in (0..n).rev() {
+        pieces.push(v.split_off(p * size));
+        v.shrink_to_fit();
+    }
+    pieces.reverse();
+    pieces
 }
 
 /// `n` zero (default) quadrics in a zeroed allocation, whose pages the
