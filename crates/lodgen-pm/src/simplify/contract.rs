@@ -5,6 +5,7 @@
 use super::{fv, Plan, Simplifier};
 use crate::mesh::adjacency::FanLookup;
 use crate::simplify::features::WedgeEdits;
+use crate::simplify::legality::{closing_hole, on_border, Faces};
 use crate::simplify::Schedule;
 
 impl Simplifier {
@@ -31,6 +32,12 @@ impl Simplifier {
             );
             (e, f.tracked())
         });
+        // a border edge whose contraction closes a triangular hole
+        let hole = if removed.len() == 1 && self.boundary[i0] && self.boundary[i1] {
+            closing_hole(self.faces(), v0, v1)
+        } else {
+            None
+        };
         let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error);
         for &t in &record.removed {
             self.tri_alive[t as usize] = false;
@@ -48,6 +55,13 @@ impl Simplifier {
         self.corner[i1] |= self.corner[i0];
         if let Some(f) = &mut self.features {
             f.contract(v0, v1);
+        }
+        if let Some(o) = hole {
+            if let Some(f) = &mut self.features {
+                f.close_hole(v1, o);
+            }
+            self.boundary[i1] = on_border(self.faces(), v1);
+            self.boundary[o as usize] = on_border(self.faces(), o);
         }
         if let Some(at) = &mut self.attributes {
             let w = self.features.as_ref().and_then(|f| f.wedges.as_deref());
@@ -153,5 +167,15 @@ impl Simplifier {
             }
         }
         self.scratch = ns;
+    }
+
+    /// The mesh state the legality tests read.
+    pub(super) fn faces(&self) -> Faces<'_, crate::mesh::adjacency::Fans> {
+        Faces {
+            tris: &self.tris,
+            alive: &self.tri_alive,
+            vtris: &self.vtris,
+            pos: &self.pos,
+        }
     }
 }

@@ -315,6 +315,21 @@ impl Features {
         }
         self.kind[v1 as usize] = Kind::of(self.nbrs[v1].len());
     }
+
+    /// After a contraction closed the triangular hole `v0 v1 o` (see
+    /// `legality::closing_hole`), the merged edge `v1 o` is interior: it
+    /// stops being a feature edge unless it can be a seam (wedges that
+    /// differ within a vertex), so the closed hole's vertices may go on to
+    /// be removed like any other.
+    pub fn close_hole(&mut self, v1: u32, o: u32) {
+        if self.wedges.is_some() && self.vertex_wedge.is_none() {
+            return;
+        }
+        self.nbrs.retain(v1, |x| x != o);
+        self.nbrs.retain(o, |x| x != v1);
+        self.kind[v1 as usize] = Kind::of(self.nbrs[v1].len());
+        self.kind[o as usize] = Kind::of(self.nbrs[o].len());
+    }
 }
 
 /// Vertex → its feature neighbours, stored for the vertices that have

@@ -114,11 +114,93 @@ pub(crate) fn link<F: FanLookup + ?Sized>(f: Faces<'_, F>, v0: u32, v1: u32) -> 
         }
         common
     });
+    // a triangular hole v0 v1 o: o is on both one-rings without a face on
+    // the edge, and closing the hole keeps the surface manifold
+    let common = if shared.len() == 1 && common == 2 && closing_hole(f, v0, v1).is_some() {
+        1
+    } else {
+        common
+    };
     Link {
         shared,
         opposite,
         common,
     }
+}
+
+/// The third vertex `o` of a triangular hole `v0 v1 o` that contracting the
+/// border edge `v0 v1` closes, if it does: the edge has one live face, whose
+/// third vertex is not `o`; `v0 o` and `v1 o` are border edges (one live face
+/// each) whose faces' third vertices differ (else the two faces would land
+/// on each other). The merged edge `v1 o` then has two faces: the result is
+/// manifold, one border loop fewer. The link condition refuses this (`o` is
+/// on both one-rings, not opposite the edge), so without it every hole kept
+/// at least three border vertices: beetle.obj's 23 border loops stopped its
+/// 2 % level at 166–174 triangles with Hausdorff 10.7–12.2 % of the
+/// diagonal, where meshoptimizer closes its small holes and spends the
+/// triangles on the large border (2.26 % at 165 triangles).
+pub(crate) fn closing_hole<F: FanLookup + ?Sized>(
+    f: Faces<'_, F>,
+    v0: u32,
+    v1: u32,
+) -> Option<u32> {
+    // (third vertex of each live face on v, as (other corner, third) pairs)
+    let faces_of = |v: u32| {
+        f.vtris.fan(v).iter().filter_map(move |&t| {
+            let tri = f.tris[t as usize];
+            (f.alive[t as usize] && tri.contains(&v)).then_some(tri)
+        })
+    };
+    let mut opposite = None;
+    for tri in faces_of(v0).filter(|tri| tri.contains(&v1)) {
+        if opposite.is_some() {
+            return None; // an interior edge
+        }
+        opposite = tri.iter().copied().find(|&x| x != v0 && x != v1);
+    }
+    let opposite = opposite?;
+    // the faces on the edge (v, o): Some(third vertex) when exactly one
+    let single = |v: u32, o: u32| -> Option<u32> {
+        let mut it = faces_of(v).filter(|tri| tri.contains(&o));
+        let tri = it.next()?;
+        if it.next().is_some() {
+            return None;
+        }
+        tri.iter().copied().find(|&x| x != v && x != o)
+    };
+    let mut found = None;
+    for tri in faces_of(v0) {
+        for o in tri {
+            if o == v0 || o == v1 || o == opposite || found == Some(o) {
+                continue;
+            }
+            let Some(y0) = single(v0, o) else { continue };
+            let Some(y1) = single(v1, o) else { continue };
+            if y0 != y1 && y0 != v1 && y1 != v0 {
+                if found.is_some() {
+                    return None;
+                }
+                found = Some(o);
+            }
+        }
+    }
+    found
+}
+
+/// Whether `v` has an open border edge (one live face) in its fan.
+pub(crate) fn on_border<F: FanLookup + ?Sized>(f: Faces<'_, F>, v: u32) -> bool {
+    let live: SmallVec<[[u32; 3]; 16]> = f
+        .vtris
+        .fan(v)
+        .iter()
+        .filter(|&&t| f.alive[t as usize] && f.tris[t as usize].contains(&v))
+        .map(|&t| f.tris[t as usize])
+        .collect();
+    live.iter().any(|tri| {
+        tri.iter()
+            .filter(|&&x| x != v)
+            .any(|&x| live.iter().filter(|t| t.contains(&x)).count() == 1)
+    })
 }
 
 /// The geometric legality of contracting `v0` into `v1` at `p`, `shared`

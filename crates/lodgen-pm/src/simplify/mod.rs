@@ -165,6 +165,8 @@ struct Plan {
     /// Deferred to a later pass: it moves the surface too far
     /// ([`SimplifyOptions::reach`]).
     deferred: bool,
+    /// [`Simplifier::hole_cost`] of the contraction (0: it closes no hole).
+    hole: f64,
 }
 
 /// A candidate of a pass: 12 bytes (the pass list and its sort buffer are

@@ -52,6 +52,11 @@ impl Simplifier {
             && limit > 0.0
             && error * error >= REACH_GATE * limit
             && self.reach_over(v0, v1, p, !removed.is_empty(), limit);
+        let hole = if removed.len() == 1 {
+            self.hole_cost(v0, v1)
+        } else {
+            0.0
+        };
         Ok(Plan {
             v0,
             v1,
@@ -59,6 +64,7 @@ impl Simplifier {
             error: error as f32,
             removed,
             deferred,
+            hole,
         })
     }
 

@@ -144,7 +144,7 @@ impl Simplifier {
             }
             let before = self.live_tris;
             match self.plan(e.a, e.b) {
-                Ok(plan) if plan.deferred => self.pass.deferred += 1,
+                Ok(plan) if plan.deferred || self.stale_hole(&plan, e) => self.pass.deferred += 1,
                 Ok(plan) => {
                     self.contract(plan);
                     let pass = &mut self.pass;
@@ -278,7 +278,8 @@ impl Simplifier {
             let n = lanes.len();
             let costs = lanes.costs();
             for (&i, &cost) in slots[..n].iter().zip(&costs[..n]) {
-                out[i].cost = self.scaled(cost, out[i].a, out[i].b);
+                let (a, b) = (out[i].a, out[i].b);
+                out[i].cost = self.scaled(cost + self.hole_cost(a, b), a, b);
             }
         };
         let mut nb: Vec<u32> = Vec::with_capacity(32);

@@ -170,7 +170,7 @@ impl Simplifier {
                 _ => self.plan(e.a, e.b),
             };
             match plan {
-                Ok(plan) if plan.deferred => self.pass.deferred += 1,
+                Ok(plan) if plan.deferred || self.stale_hole(&plan, e) => self.pass.deferred += 1,
                 Ok(plan) => {
                     let before = self.live_tris;
                     let (v1, removed) = (plan.v1, plan.removed.clone());
