@@ -2,6 +2,8 @@
 //! paper states about its operators, the border rule, the classification,
 //! and the vertex-split log's replay invariant for every method.
 
+mod common;
+
 use lodgen_pm::adaptive::{
     boundary_vertices, classify, normal_deviation, threshold_value, Repairs,
 };
@@ -359,12 +361,7 @@ fn algorithm_5_defects_never_survive() {
         assert!(keys.windows(2).all(|w| w[0] != w[1]), "{method}: a spike");
         // consistently oriented: no directed edge used twice (a reversed
         // face next to its neighbours reuses one)
-        let mut e: Vec<(u32, u32)> = base
-            .triangles
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .collect();
-        e.sort_unstable();
+        let e = common::directed_edges(base);
         assert!(
             e.windows(2).all(|w| w[0] != w[1]),
             "{method}: reversed face"

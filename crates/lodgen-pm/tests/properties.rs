@@ -28,20 +28,9 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// Directed edge multiset of a mesh, sorted.
-fn directed_edges(m: &Mesh) -> Vec<(u32, u32)> {
-    let mut e: Vec<(u32, u32)> = m
-        .triangles
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .collect();
-    e.sort_unstable();
-    e
-}
-
 /// Whether every edge has at most two faces, oriented consistently.
 fn is_edge_manifold(m: &Mesh) -> bool {
-    let e = directed_edges(m);
+    let e = common::directed_edges(m);
     e.windows(2).all(|w| w[0] != w[1])
 }
 

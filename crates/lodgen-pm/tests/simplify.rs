@@ -462,12 +462,7 @@ fn a_triangular_hole_closes() {
                 .with_target_triangles(0),
         );
         let base = &out.pm.base;
-        let mut e: Vec<(u32, u32)> = base
-            .triangles
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .collect();
-        e.sort_unstable();
+        let e = common::directed_edges(base);
         for &(a, b) in &e {
             assert!(
                 e.binary_search(&(b, a)).is_ok(),

@@ -1,6 +1,8 @@
 //! Shared by the core's integration tests: locating `../shared/assets`
-//! (or `$LODGEN_ASSETS`) and a minimal OBJ reader (`v`/`f` lines only; the
-//! core has no I/O, and the full readers live in the `lodgen` crate).
+//! (or `$LODGEN_ASSETS`), a minimal OBJ reader (`v`/`f` lines only; the
+//! core has no I/O, and the full readers live in the `lodgen` crate) and a
+//! mesh's directed edges. Each test binary uses part of it.
+#![allow(dead_code)]
 
 use std::path::PathBuf;
 
@@ -53,4 +55,17 @@ pub fn read_obj(text: &str) -> (Vec<[f32; 3]>, Vec<u32>) {
         }
     }
     (p, idx)
+}
+
+/// The directed edges of `m`'s triangles, sorted (a repeat is a face
+/// reversed next to its neighbour or an edge of three faces; an edge
+/// without its reverse is open).
+pub fn directed_edges(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
+    let mut e: Vec<(u32, u32)> = m
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .collect();
+    e.sort_unstable();
+    e
 }
