@@ -325,17 +325,10 @@ fn area_weighted_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3
 }
 
 /// Center and uniform half extent of the chain's bounding box (half extent 1
-/// for a degenerate box).
+/// for a degenerate box): [`lodgen_pm::stream::Grid::around`], the one
+/// computation `lodgen::progressive::level_grid` puts the stream on too.
 fn dequantization(levels: &[Vec<Prepared>]) -> ([f64; 3], f64) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in levels.iter().flatten().flat_map(|p| &p.positions) {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a] as f64);
-            hi[a] = hi[a].max(p[a] as f64);
-        }
-    }
-    let center = [0, 1, 2].map(|a| (lo[a] + hi[a]) * 0.5);
-    let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
-    (center, if half > 0.0 { half } else { 1.0 })
+    let used = levels.iter().flatten().flat_map(|p| &p.positions);
+    let grid = lodgen_pm::stream::Grid::around(used, 16);
+    (grid.center, grid.half)
 }
