@@ -4,13 +4,16 @@
 //
 //   node stream-bench.mjs --progressive P.glb --plain F.glb [--name NAME]
 //        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json] [--timeline]
+//        [--render task|each]
 //
 // The local server sends every response after `latency-ms`, at `mbit`
 // Mbit/s, responses one after another on the one simulated line. The page
 // loads, alternately: F.glb (the plain `--quantize --compress meshopt` full
 // mesh) with GLTFLoader + MeshoptDecoder until drawn; P.glb with lodgen's
 // loader (coarsest level drawn = first pixel; every level applied and drawn
-// = full detail). Prints the medians; exit 1 on a failure.
+// = full detail; the page draws once per task, as a render loop would once
+// per frame, so levels applied in one go share a draw; `--render each`: a
+// draw on every level event). Prints the medians; exit 1 on a failure.
 
 import fs from 'node:fs';
 import { bundle, launch, startServer } from './browser.mjs';
@@ -23,7 +26,7 @@ const HTML = `<!doctype html>
 `;
 
 function parseArgs(argv) {
-  const o = { mbit: 10, latency: 50, runs: 3, name: 'mesh' };
+  const o = { mbit: 10, latency: 50, runs: 3, name: 'mesh', render: 'task' };
   for (let i = 0; i < argv.length; i++) {
     const a = argv[i], v = () => argv[++i];
     if (a === '--progressive') o.progressive = v();
@@ -34,6 +37,7 @@ function parseArgs(argv) {
     else if (a === '--runs') o.runs = Number(v());
     else if (a === '--json') o.json = v();
     else if (a === '--timeline') o.timeline = true;
+    else if (a === '--render') o.render = v();
     else { console.error(`stream-bench.mjs: unknown argument ${a}`); process.exit(2); }
   }
   if (!o.progressive || !o.plain) { console.error('stream-bench.mjs: needs --progressive P.glb --plain F.glb'); process.exit(2); }
@@ -67,7 +71,7 @@ async function main() {
     for (let r = 0; r < o.runs; r++) {
       const plain = await page.evaluate((u) => window.runPlain(u), `${base}/plain.glb`);
       requests.length = 0;
-      const prog = await page.evaluate((u) => window.runProgressive(u, { hash: false }), `${base}/progressive.glb`);
+      const prog = await page.evaluate(([u, render]) => window.runProgressive(u, { hash: false, render }), [`${base}/progressive.glb`, o.render]);
       const mine = requests.filter((q) => q.path === '/progressive.glb');
       const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
       runs.plain.push(plain.t);
