@@ -17,8 +17,12 @@
 //! `SAMPLES` area samples per direction plus every vertex, in percent of
 //! the bounding-box diagonal.
 //!
-//! Writes `docs/quality.md` (the table) and `docs/quality.png` (error
-//! against triangle count, one panel per mesh). `--quick`: lodgen and
+//! Writes `docs/quality.md` (the table; the file's hand-written part after
+//! [`HAND_WRITTEN`] is kept) and `docs/quality.png` (error against triangle
+//! count, one panel per mesh). A full run records the peers' cells with the
+//! triangle count each was asked for (`target/quality-peers.tsv`) and re-runs
+//! the Python peers only for the cells whose count changed since (`--fresh`
+//! re-runs them all). `--quick`: lodgen and
 //! meshopt only, no big mesh, nothing written (the loop for trying a change
 //! of the simplifier); when the last full run recorded the peers' cells
 //! (`target/quality-peers.tsv`), only lodgen is run and measured and its
@@ -57,10 +61,14 @@ const PEERS: [(&str, &str, &str); 4] = [
     ("pyfqmr", "pyfqmr", "pyfqmr"),
     ("fast-simpl.", "fast_simplification", "fast-simplification"),
 ];
-/// The peers' cells of the last full run, for `--quick`: one line per cell,
-/// `mesh ratio peer triangles hausdorff rms`, tab-separated (peer: index in
-/// `Row::peers`, 0 = meshopt).
+/// The peers' cells of the last full runs: one line per cell, `mesh ratio
+/// peer triangles hausdorff rms asked`, tab-separated (peer: index in
+/// `Row::peers`, 0 = meshopt; asked: the triangle count the peer was asked
+/// for, lodgen's; older files lack it).
 const RECORDED: &str = "target/quality-peers.tsv";
+/// The line of docs/quality.md after which the text is hand-written: a full
+/// run rewrites what is above it and keeps the rest.
+const HAND_WRITTEN: &str = "<!-- Hand-written below: `cargo xtask quality` keeps what follows. -->";
 const PLOT_PANEL: (u32, u32) = (420, 330);
 const DEFAULT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
@@ -135,6 +143,7 @@ struct Args {
     python: bool,
     greedy: bool,
     reach: bool,
+    fresh: bool,
 }
 
 fn parse(args: &[String]) -> Result<Args> {
@@ -144,6 +153,7 @@ fn parse(args: &[String]) -> Result<Args> {
         python: true,
         greedy: false,
         reach: false,
+        fresh: false,
     };
     let mut it = args.iter();
     let mut chosen = false;
@@ -161,9 +171,10 @@ fn parse(args: &[String]) -> Result<Args> {
             "--no-peers" => out.python = false,
             "--greedy" => out.greedy = true,
             "--reach" => out.reach = true,
+            "--fresh" => out.fresh = true,
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach)"
+                 --reach, --fresh)"
             ),
         }
     }
@@ -381,28 +392,47 @@ pub fn run(args: &[String]) -> Result<()> {
         .with_samples_per_triangle(0.0)
         .with_min_samples(samples);
     let python = if args.python { peer_python()? } else { None };
-    let recorded = if python.is_none() {
-        read_recorded()?
-    } else {
+    let recorded = if args.fresh {
         Vec::new()
+    } else {
+        read_recorded()?
     };
     let mut rows = Vec::new();
+    let mut rerun = 0;
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
         let levels = lodgen_levels(&m, args.greedy, args.reach)?;
         let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
+        // levels whose recorded peers' cells may stand (all of them in a
+        // quick run, which only says when a count moved)
+        let reuse: Vec<bool> = (0..counts.len())
+            .map(|k| python.is_none() || recorded_at(&recorded, name, RATIOS[k], counts[k]))
+            .collect();
         let mut peers: Vec<Vec<Option<Mesh>>> = vec![vec![None; counts.len()]; PEERS.len()];
         if let Some((py, usable)) = &python {
-            peers = python_peers(py, usable, &m, &counts)?;
+            let stale: Vec<usize> = (0..counts.len()).filter(|&k| !reuse[k]).collect();
+            if !stale.is_empty() {
+                let asked: Vec<usize> = stale.iter().map(|&k| counts[k]).collect();
+                let ran = python_peers(py, usable, &m, &asked)?;
+                for (i, per_count) in ran.into_iter().enumerate() {
+                    for (mesh, &k) in per_count.into_iter().zip(&stale) {
+                        peers[i][k] = mesh;
+                    }
+                }
+                rerun += stale.len();
+            }
         }
         for (k, level) in levels.iter().enumerate() {
             let lodgen = measure_cell(&reference, level, &mopts)?;
             let recorded_cell = |i: usize| {
+                if !reuse[k] {
+                    return None;
+                }
                 let c = recorded
                     .iter()
-                    .find(|r| r.0 == name && r.1 == RATIOS[k] && r.2 == i)
-                    .map(|r| r.3)?;
+                    .find(|r| r.mesh == name && r.ratio == RATIOS[k] && r.peer == i)
+                    .map(|r| r.cell)?;
                 // (meshopt meets the count; other peers may stop short)
                 if i == 0 && c.triangles.abs_diff(counts[k]) * 100 > counts[k] {
                     eprintln!(
@@ -413,14 +443,11 @@ pub fn run(args: &[String]) -> Result<()> {
                 }
                 Some(c)
             };
-            let mut cells = vec![match recorded_cell(0) {
-                Some(c) => Some(c),
-                None => Some(measure_cell(
-                    &reference,
-                    &meshopt_level(&m, counts[k])?,
-                    &mopts,
-                )?),
-            }];
+            let meshopt = match recorded_cell(0).filter(|_| python.is_none()) {
+                Some(c) => c,
+                None => measure_cell(&reference, &meshopt_level(&m, counts[k])?, &mopts)?,
+            };
+            let mut cells = vec![Some(meshopt)];
             for (i, p) in peers.iter().enumerate() {
                 cells.push(match &p[k] {
                     Some(mesh) => Some(measure_cell(&reference, mesh, &mopts)?),
@@ -442,8 +469,18 @@ pub fn run(args: &[String]) -> Result<()> {
     if !args.quick {
         let docs = crate::workspace_root().join("docs");
         plot(&docs.join("quality.png"), &args.meshes, &rows)?;
-        std::fs::write(docs.join("quality.md"), report(&rows, samples))
-            .context("writing docs/quality.md")?;
+        let md = docs.join("quality.md");
+        let old = std::fs::read_to_string(&md).unwrap_or_default();
+        let hand = old.find(HAND_WRITTEN).map_or("", |i| &old[i..]);
+        let note = format!(
+            "This table: `cargo xtask quality {}`; the Python peers ran for {rerun} of the {} \
+             cells, the others are the cells recorded at the same triangle count by earlier \
+             runs (`--fresh` runs them all).",
+            std::env::args().skip(2).collect::<Vec<_>>().join(" "),
+            rows.len()
+        );
+        std::fs::write(&md, report(&rows, samples, &note, hand))
+            .with_context(|| format!("writing {}", md.display()))?;
         if python.is_some() {
             write_recorded(&rows)?;
         }
@@ -452,20 +489,48 @@ pub fn run(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// A recorded peer's cell: mesh, ratio, index in `Row::peers`, cell.
-type RecordedCell = (String, f64, usize, Cell);
+/// A recorded peer's cell.
+struct RecordedCell {
+    mesh: String,
+    ratio: f64,
+    /// Index in `Row::peers`.
+    peer: usize,
+    cell: Cell,
+    /// The triangle count the peer was asked for (lodgen's), when recorded.
+    asked: Option<usize>,
+}
+
+/// Whether the cells recorded for `mesh` at `ratio` were asked for `count`
+/// triangles (for cells recorded without it: whether meshopt's is within
+/// 1 % of `count`).
+fn recorded_at(recorded: &[RecordedCell], mesh: &str, ratio: f64, count: usize) -> bool {
+    let mut cells = recorded
+        .iter()
+        .filter(|r| r.mesh == mesh && r.ratio == ratio)
+        .peekable();
+    cells.peek().is_some()
+        && cells.all(|r| match r.asked {
+            Some(a) => a == count,
+            None => r.peer != 0 || r.cell.triangles.abs_diff(count) * 100 <= count,
+        })
+}
 
 /// Records the peers' cells of a full run for `--quick` (replacing
 /// the recorded cells of the meshes it ran, keeping the others).
 fn write_recorded(rows: &[Row]) -> Result<()> {
     let mut s = String::new();
-    for (mesh, ratio, i, c) in read_recorded()? {
-        if rows.iter().all(|r| r.mesh != mesh) {
-            let _ = writeln!(
+    for r in read_recorded()? {
+        if rows.iter().all(|row| row.mesh != r.mesh) {
+            let c = r.cell;
+            let _ = write!(
                 s,
-                "{mesh}\t{ratio}\t{i}\t{}\t{}\t{}",
-                c.triangles, c.hausdorff, c.rms
+                "{}\t{}\t{}\t{}\t{}\t{}",
+                r.mesh, r.ratio, r.peer, c.triangles, c.hausdorff, c.rms
             );
+            let _ = match r.asked {
+                Some(a) => writeln!(s, "\t{a}"),
+                None => writeln!(s),
+            };
         }
     }
     for row in rows {
@@ -473,8 +538,8 @@ fn write_recorded(rows: &[Row]) -> Result<()> {
             if let Some(c) = c {
                 let _ = writeln!(
                     s,
-                    "{}\t{}\t{i}\t{}\t{}\t{}",
-                    row.mesh, row.ratio, c.triangles, c.hausdorff, c.rms
+                    "{}\t{}\t{i}\t{}\t{}\t{}\t{}",
+                    row.mesh, row.ratio, c.triangles, c.hausdorff, c.rms, row.lodgen.triangles
                 );
             }
         }
@@ -497,18 +562,19 @@ fn read_recorded() -> Result<Vec<RecordedCell>> {
         .map(|l| {
             let f: Vec<&str> = l.split('\t').collect();
             let bad = || format!("{}: bad line {l:?}", path.display());
-            anyhow::ensure!(f.len() == 6, bad());
+            anyhow::ensure!(f.len() == 6 || f.len() == 7, bad());
             let num = |i: usize| f[i].parse::<f64>().with_context(bad);
-            Ok((
-                f[0].to_string(),
-                num(1)?,
-                f[2].parse().with_context(bad)?,
-                Cell {
+            Ok(RecordedCell {
+                mesh: f[0].to_string(),
+                ratio: num(1)?,
+                peer: f[2].parse().with_context(bad)?,
+                cell: Cell {
                     triangles: f[3].parse().with_context(bad)?,
                     hausdorff: num(4)?,
                     rms: num(5)?,
                 },
-            ))
+                asked: f.get(6).map(|a| a.parse()).transpose().with_context(bad)?,
+            })
         })
         .collect()
 }
@@ -520,17 +586,24 @@ fn peer_labels() -> Vec<&'static str> {
         .collect()
 }
 
-/// The best peer's Hausdorff and RMS (each over the peers that ran), with
-/// the tools' labels.
 /// An error value and the tool that reached it.
 type Best = (f64, &'static str);
 
+/// Whether a peer's cell stopped short of the row's triangle count (more
+/// than 1 % over lodgen's): it is shown but not compared (pyfqmr stops at
+/// 472 triangles on beetle, for instance, where lodgen's level has 120).
+fn over_count(c: &Cell, row: &Row) -> bool {
+    c.triangles * 100 > row.lodgen.triangles * 101
+}
+
+/// The best peer's Hausdorff and RMS (each over the peers that ran and met
+/// the count), with the tools' labels.
 fn best(row: &Row) -> Option<(Best, Best)> {
     let labels = peer_labels();
     let mut h: Option<(f64, &str)> = None;
     let mut r: Option<(f64, &str)> = None;
     for (c, l) in row.peers.iter().zip(labels) {
-        if let Some(c) = c {
+        if let Some(c) = c.filter(|c| !over_count(c, row)) {
             if h.is_none_or(|b| c.hausdorff < b.0) {
                 h = Some((c.hausdorff, l));
             }
@@ -585,7 +658,9 @@ fn geo_means(rows: &[Row]) -> (f64, f64) {
     ((lh / n as f64).exp(), (lr / n as f64).exp())
 }
 
-fn report(rows: &[Row], samples: usize) -> String {
+/// docs/quality.md: the generated text with `note` (how this table was
+/// made), then `hand` (the file's hand-written part, from [`HAND_WRITTEN`]).
+fn report(rows: &[Row], samples: usize, note: &str, hand: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -600,7 +675,8 @@ fn report(rows: &[Row], samples: usize) -> String {
          (`simplify_quadric_decimation`), pyfqmr, fast-simplification. Errors: \
          `lodgen_pm::metric`, symmetric, {samples} area samples per direction plus every \
          vertex, in % of the bounding-box diagonal. H = Hausdorff, R = RMS; **bold**: lodgen \
-         worse than the best peer; ratio = lodgen / best peer.\n"
+         worse than the best peer; ratio = lodgen / best peer. A peer that stopped more than \
+         1 % above the count is shown in parentheses with its count and not compared.\n\n{note}\n"
     );
     let labels = peer_labels();
     let _ = write!(s, "| mesh | level | tris | lodgen H / R |");
@@ -632,6 +708,13 @@ fn report(rows: &[Row], samples: usize) -> String {
         );
         for c in &row.peers {
             match c {
+                Some(c) if over_count(c, row) => {
+                    let _ = write!(
+                        s,
+                        " ({:.4} / {:.5} at {} tris) |",
+                        c.hausdorff, c.rms, c.triangles
+                    );
+                }
                 Some(c) => {
                     let _ = write!(s, " {:.4} / {:.5} |", c.hausdorff, c.rms);
                 }
@@ -658,8 +741,13 @@ fn report(rows: &[Row], samples: usize) -> String {
     let _ = writeln!(
         s,
         "\nGeometric mean of lodgen / best peer over the cells: Hausdorff {gh:.3}, RMS {gr:.3}.\n\n\
-         ![error against triangle count](quality.png)"
+         ![error against triangle count](quality.png)\n"
     );
+    if hand.is_empty() {
+        let _ = writeln!(s, "{HAND_WRITTEN}");
+    } else {
+        s.push_str(hand);
+    }
     s
 }
 
