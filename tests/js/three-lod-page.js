@@ -142,6 +142,32 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized };
 };
 
+// A file whose TEXCOORD_0 is normalized u16 with KHR_texture_transform:
+// the finest level streamed against the same level loaded by GLTFLoader
+// (its uv as stored u16 values): how many streamed UVs are off every u16
+// step by more than 1/100 of one or not among the file's, how many of the
+// file's distinct UV pairs are not drawn.
+window.uvRangeCheck = async (url) => {
+  const r = await window.runProgressive(url, { keep: true, hash: false });
+  const p = window.progressive;
+  const plain = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).loadAsync(url);
+  let fileUv = null;
+  plain.scene.traverse((o) => { if (o.isMesh && o.visible && !fileUv) fileUv = o.geometry.attributes.uv; });
+  const key = (a, b) => a * 65536 + b;
+  const file = new Set();
+  for (let i = 0; i < fileUv.count; i++) file.add(key(fileUv.array[2 * i], fileUv.array[2 * i + 1]));
+  const uv = p.geometry.attributes.uv.array, seen = new Set();
+  let unmatched = 0;
+  for (let c = 0; c < 3 * p.nt; c++) {
+    const a = uv[2 * c] * 65535, b = uv[2 * c + 1] * 65535, qa = Math.round(a), qb = Math.round(b);
+    if (Math.abs(a - qa) > 0.01 || Math.abs(b - qb) > 0.01 || !file.has(key(qa, qb))) unmatched++;
+    seen.add(key(qa, qb));
+  }
+  const ch = p.channels.find((x) => x.c.name === 'TEXCOORD_0');
+  return { drawn: 3 * p.nt, unmatched, missing: [...file].filter((k) => !seen.has(k)).length, fileValues: file.size,
+    transform: ch && ch.remap, events: r.events.length };
+};
+
 // Plain GLTFLoader (+ MeshoptDecoder): time until the full mesh is drawn.
 window.runPlain = async (url) => {
   clear();

@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // lodgen's three.js loader (crates/lodgen/web/three) in headless Chromium.
 //
-//   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--out DIR]      (or env LODGEN_BIN)
+//   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--uv-range UV.glb] [--out DIR]      (or env LODGEN_BIN)
 //
 // FILE.glb is a `lodgen --progressive` output. Expectations come from
 // `BIN view --print-levels FILE.glb` (each level's records, triangles,
@@ -22,6 +22,11 @@
 // level draws the level's triangles, index and position hashes and corner attribute hash
 // (each corner's group and drawn attribute values, `attributeHash`), with
 // the streamed UVs and normals as three.js attributes.
+// UV.glb (glTF input with a textured material whose UVs leave [0, 1],
+// written with --quantize: TEXCOORD_0 normalized u16 plus
+// KHR_texture_transform): the finest streamed level's UVs are the file's
+// finest level's, in the file's space (each within 1/100 of a u16 step of
+// one of its values, and every one of its values drawn).
 // Exit 0 on success, 1 on failure, 2 on bad usage.
 
 import { execFileSync } from 'node:child_process';
@@ -48,6 +53,7 @@ function parseArgs(argv) {
     if (a === '--lodgen') o.lodgen = argv[++i];
     else if (a === '--out') o.out = path.resolve(argv[++i]);
     else if (a === '--attributes') o.attributes = argv[++i];
+    else if (a === '--uv-range') o.uvRange = argv[++i];
     else if (a.startsWith('-')) usage(`unknown option ${a}`);
     else o.files.push(a);
   }
@@ -71,6 +77,7 @@ async function main() {
     },
     '/model.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]) },
     ...(o.attributes ? { '/attributes.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.attributes) } } : {}),
+    ...(o.uvRange ? { '/uvrange.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.uvRange) } } : {}),
   };
   const server = await startServer(routes, requests);
   const base = `http://127.0.0.1:${server.address().port}`;
@@ -142,6 +149,15 @@ async function main() {
       check(/\bnormal\b/.test(last.attributes) && /\buv\b/.test(last.attributes) && last.variance > MIN_VARIANCE,
         `attributes: the finest level draws streamed normals and UVs (${last.attributes}), not blank (variance ${last.variance.toFixed(1)})`);
       await page.screenshot({ path: path.join(o.out, 'three-progressive-attributes.png') });
+    }
+
+    // UVs quantized over their range with KHR_texture_transform: the
+    // stream's UVs land in the file's space
+    if (o.uvRange) {
+      const u = await page.evaluate(() => window.uvRangeCheck('/uvrange.glb'));
+      check(u.transform && u.unmatched === 0 && u.missing === 0 && u.drawn > 0,
+        `uv range: ${u.drawn} streamed UVs, ${u.unmatched} off the file's u16 values, ${u.missing} of the file's ${u.fileValues} ` +
+          `values not drawn; texture transform ${JSON.stringify(u.transform)}`);
     }
 
     // without the plugin: three-gltf-extensions' MSFT_lod, coverage hook

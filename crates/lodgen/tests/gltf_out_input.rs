@@ -350,3 +350,75 @@ fn gltf_origin_chain(
     let lod = chain(name, 0, prim, &[0.4, 0.1]);
     (scene, lod)
 }
+
+/// `quantize` on glTF input whose UVs leave [0, 1] (here [-1, 2]) under a
+/// textured material: TEXCOORD_0 is normalized `u16` over the UVs' range
+/// and every texture of the material reading TEXCOORD_0 gets that range as
+/// `KHR_texture_transform` (required); each UV so decoded lies within half
+/// a step of the `f32` file's (fails when the range or the rounding
+/// differs from the stream's `Unorm16Range`), and glTF-Validator passes.
+#[test]
+fn quantized_uvs_leaving_the_unit_square_take_a_texture_transform() {
+    let (mut scene, mut lod) = gltf_scene();
+    for p in lod.levels.iter_mut().flat_map(|l| &mut l.primitives) {
+        for t in p.texcoords.iter_mut().flatten() {
+            *t = t.map(|c| c * 3.0 - 1.0);
+        }
+    }
+    if let Origin::Gltf { json, .. } = &mut scene.origin {
+        json["materials"][0]["occlusionTexture"] = serde_json::json!({"index": 0});
+    }
+    let dir = scratch("uv-range");
+    let q = WriteOptions {
+        quantize: true,
+        compression: Compression::None,
+    };
+    let (qjson, qbuf, _) = write_and_load(&dir.join("q.glb"), &scene, &lod, &q, "uv_range_q");
+    let f = WriteOptions::default();
+    let (fjson, fbuf, _) = write_and_load(&dir.join("f.glb"), &scene, &lod, &f, "uv_range_f");
+    let material = &qjson["materials"][0];
+    let transform = &material["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]
+        ["KHR_texture_transform"];
+    assert_eq!(
+        material["occlusionTexture"]["extensions"]["KHR_texture_transform"],
+        *transform
+    );
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        assert!(qjson[key]
+            .as_array()
+            .unwrap()
+            .contains(&"KHR_texture_transform".into()));
+    }
+    let offset = transform["offset"][0].as_f64().unwrap();
+    let scale = transform["scale"][0].as_f64().unwrap();
+    assert_eq!(transform["offset"][1], transform["offset"][0]);
+    assert_eq!(transform["scale"][1], transform["scale"][0]);
+    assert!(offset <= -1.0 + 1e-6 && offset + scale >= 2.0 - 1e-6);
+    let step = scale / 65535.0;
+    for mesh in 0..lod.levels.len() {
+        let uv = |json: &serde_json::Value| {
+            json["meshes"][mesh]["primitives"][0]["attributes"]["TEXCOORD_0"]
+                .as_u64()
+                .unwrap() as usize
+        };
+        let a = &qjson["accessors"][uv(&qjson)];
+        assert_eq!(
+            (a["componentType"].as_u64(), a["normalized"].as_bool()),
+            (Some(5123), Some(true))
+        );
+        let got = accessor_values(&qjson, &qbuf, uv(&qjson));
+        let want = accessor_values(&fjson, &fbuf, uv(&fjson));
+        assert_eq!(got.len(), want.len());
+        let worst = got
+            .iter()
+            .flatten()
+            .zip(want.iter().flatten())
+            .map(|(q, f)| (offset + scale * q - f).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst <= step * 0.5 + 1e-6,
+            "level {mesh}: UV off by {worst} (step {step})"
+        );
+    }
+    support::validate(&dir);
+}

@@ -57,7 +57,13 @@ fn three_loader_streams_every_level_in_headless_chromium() {
             .status()
             .unwrap();
         assert!(status.success());
-        extra = vec!["--attributes", spot.to_str().unwrap()];
+        extra = vec![
+            "--attributes".to_string(),
+            spot.to_str().unwrap().to_string(),
+        ];
+        let uv = dir.path().join("uvrange.glb");
+        textured_spot_quantized(&input, &uv);
+        extra.extend(["--uv-range".to_string(), uv.to_str().unwrap().to_string()]);
     }
     let out = root().join("target/test-out/three");
     std::fs::create_dir_all(&out).unwrap();
@@ -68,5 +74,48 @@ fn three_loader_streams_every_level_in_headless_chromium() {
         "--out",
         out.to_str().unwrap(),
     ];
+    let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
     browser::run_script("three-lod.mjs", &[&args[..], &extra].concat());
+}
+
+/// spot.obj as glTF input with a textured material (its UVs leave [0, 1]),
+/// written to `out` with `--progressive --quantize --compress meshopt`:
+/// TEXCOORD_0 normalized u16 over the UVs' range, KHR_texture_transform on
+/// the material's texture.
+fn textured_spot_quantized(spot: &std::path::Path, out: &std::path::Path) {
+    let bin = env!("CARGO_BIN_EXE_lodgen");
+    let plain = out.with_file_name("spot-plain.glb");
+    let run = |input: &std::path::Path, output: &std::path::Path, args: &[&str]| {
+        let status = Command::new(bin)
+            .arg(input)
+            .arg("-o")
+            .arg(output)
+            .args(args)
+            .arg("--quiet")
+            .status()
+            .unwrap();
+        assert!(status.success());
+    };
+    run(spot, &plain, &["--levels", "100%"]);
+    let bytes = std::fs::read(&plain).unwrap();
+    let (mut root, data) = lodgen::progressive::parse_glb(&bytes).unwrap();
+    let png = support::gltf::base64(&support::gltf::PNG_2X2);
+    root["images"] = serde_json::json!([{ "uri": format!("data:image/png;base64,{png}") }]);
+    root["textures"] = serde_json::json!([{ "source": 0 }]);
+    root["materials"] =
+        serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+    for mesh in root["meshes"].as_array_mut().unwrap() {
+        for p in mesh["primitives"].as_array_mut().unwrap() {
+            p["material"] = 0.into();
+        }
+    }
+    let textured = out.with_file_name("spot-textured.glb");
+    let glb = lodgen::progressive::write_glb(&root, data).unwrap();
+    std::fs::write(&textured, glb).unwrap();
+    let levels = ["--levels", "100%,50%,10%,2%", "--progressive", "--quantize"];
+    run(
+        &textured,
+        out,
+        &[&levels[..], &["--compress", "meshopt"]].concat(),
+    );
 }

@@ -55,6 +55,11 @@ pub(super) struct Builder {
     pub(super) meshes: Vec<Value>,
     /// What of the input is not carried into the output, in words.
     pub(super) warnings: Vec<crate::scene::Warning>,
+    /// Per material, the range its TEXCOORD_0 is quantized over
+    /// (`uvrange`; empty: none).
+    pub(super) uv_ranges: Vec<Option<lodgen_pm::stream::Range>>,
+    /// Whether some material got `KHR_texture_transform`.
+    pub(super) texture_transform: bool,
 }
 
 pub(super) fn align4(v: &mut Vec<u8>) {
@@ -73,6 +78,8 @@ impl Builder {
             accessors: Vec::new(),
             meshes: Vec::new(),
             warnings: Vec::new(),
+            uv_ranges: Vec::new(),
+            texture_transform: false,
         }
     }
 
@@ -206,7 +213,7 @@ impl Builder {
         attributes.insert("NORMAL".into(), self.accessor(normal).into());
 
         if let Some(uv) = &p.texcoords {
-            let (accessor, b) = self.add_texcoord0(segment, uv, count)?;
+            let (accessor, b) = self.add_texcoord0(segment, uv, count, p.material)?;
             total += b;
             attributes.insert("TEXCOORD_0".into(), self.accessor(accessor).into());
         }
@@ -385,16 +392,24 @@ impl Builder {
         })
     }
 
-    /// TEXCOORD_0: `u16` normalized with `quantize` when within [0, 1], else
-    /// floats.
+    /// TEXCOORD_0: `u16` normalized with `quantize` when within [0, 1] or
+    /// over the material's range (`uvrange`), else floats.
     fn add_texcoord0(
         &mut self,
         segment: usize,
         uv: &[[f32; 2]],
         count: usize,
+        material: Option<usize>,
     ) -> Result<(Value, usize), WriteError> {
         let unit = uv.iter().flatten().all(|c| (0.0..=1.0).contains(c));
-        Ok(if self.opts.quantize && unit {
+        let range = material.and_then(|m| self.uv_ranges.get(m).copied().flatten());
+        Ok(if let Some(r) = range {
+            let bytes = super::uvrange::encode(uv, r);
+            let (view, b) = self.view(segment, Payload::Attribute { bytes, stride: 4 })?;
+            let accessor = json!({"bufferView": view, "componentType": UNSIGNED_SHORT,
+                                  "normalized": true, "count": count, "type": "VEC2"});
+            (accessor, b)
+        } else if self.opts.quantize && unit {
             let mut bytes = Vec::with_capacity(count * 4);
             for c in uv.iter().flatten() {
                 let q = (*c as f64 * 65535.0).round().clamp(0.0, 65535.0) as u16;

@@ -179,6 +179,11 @@ impl Builder {
             used.push("KHR_mesh_quantization".into());
             required.push("KHR_mesh_quantization".into());
         }
+        if self.texture_transform {
+            // the quantized UVs are wrong without it
+            used.push(super::uvrange::EXTENSION.into());
+            required.push(super::uvrange::EXTENSION.into());
+        }
         if self.compress() {
             used.push("EXT_meshopt_compression".into());
             required.push("EXT_meshopt_compression".into());

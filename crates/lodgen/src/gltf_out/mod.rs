@@ -36,7 +36,9 @@
 //!   do not inherit the dequantization. The other attributes keep compact
 //!   formats (`KHR_mesh_quantization` and the core spec): NORMAL and TANGENT
 //!   normalized `i8`, TEXCOORD_n normalized `u16` when within [0, 1] (float
-//!   otherwise), COLOR_n normalized `u8` when within [0, 1], WEIGHTS_n
+//!   otherwise; for glTF input, TEXCOORD_0 of a textured material leaving
+//!   [0, 1] normalized `u16` over its range, given back by
+//!   `KHR_texture_transform` on the material's textures: `uvrange`), COLOR_n normalized `u8` when within [0, 1], WEIGHTS_n
 //!   normalized `u8` with each vertex's sets summing to exactly 255, JOINTS_n
 //!   `u8` when every joint index of the primitive is below 256 (`u16`
 //!   otherwise). Without `quantize`: floats, `u16` joints.
@@ -67,6 +69,7 @@ mod input;
 mod msft_lod;
 mod options;
 mod prepare;
+mod uvrange;
 
 use std::path::Path;
 
@@ -127,6 +130,11 @@ pub fn write_lods_with(
 
     let mut out = Builder::new(level_count, opts);
     out.warnings = warnings;
+    if let Origin::Gltf { json, .. } = &scene.origin {
+        let materials = json.get("materials").and_then(|m| m.as_array());
+        let materials = materials.map_or(&[][..], Vec::as_slice);
+        out.uv_ranges = uvrange::material_ranges(materials, &chains, opts.quantize);
+    }
     let mut summary = WriteSummary::default();
     let mut chain_meshes = Vec::with_capacity(chains.len());
     for chain in &chains {
@@ -158,6 +166,8 @@ pub fn write_lods_with(
             &mut out,
         )?,
     };
+
+    out.texture_transform = uvrange::add_transforms(&mut root, &out.uv_ranges);
 
     let stem = path
         .file_stem()

@@ -10,7 +10,8 @@
 //   await p.refine();                           // or p.refine(level): stop at a level
 //
 // loadProgressive reads the file from its start in one request, as the
-// bytes arrive: the GLB header and JSON, the coarsest MSFT_lod level, which
+// bytes arrive: the GLB header and JSON, the data no level owns (images),
+// the coarsest MSFT_lod level, which
 // GLTFLoader parses at once (a GLTFLoader plugin finds the primitive
 // carrying LODGEN_progressive), and, where lodgen puts it right behind, the
 // stream up to the `prefetch` level; then it lets the rest of the file go.
@@ -303,7 +304,13 @@ export class ProgressiveMesh extends EventDispatcher {
       if (!name || g.attributes[name]) continue;
       g.setAttribute(name, new BufferAttribute(new Float32Array(n * c.components), c.components));
       g.attributes[name].setUsage(35048);
-      this.channels.push({ c, attr: g.attributes[name] });
+      // TEXCOORD_0 streamed over its range while the file stores it as
+      // normalized u16 whose range the material's KHR_texture_transform
+      // gives back (lodgen --quantize on glTF input, UVs leaving [0, 1]):
+      // the geometry takes the file's values, (uv - offset) / scale, so
+      // three.js applies the range once
+      const remap = c.name === "TEXCOORD_0" && c.encoding === 4 ? this.uvTransform() : null;
+      this.channels.push({ c, attr: g.attributes[name], remap });
     }
     if (!g.attributes.normal) {
       // none streamed: each corner gets its vertex's computed normal
@@ -320,12 +327,13 @@ export class ProgressiveMesh extends EventDispatcher {
       const v = 3 * idx[c];
       pos[3 * c] = vp[v]; pos[3 * c + 1] = vp[v + 1]; pos[3 * c + 2] = vp[v + 2];
     }
-    for (const { c: ch, attr } of this.channels) {
+    for (const { c: ch, attr, remap } of this.channels) {
       const out = attr.array, k = ch.components;
       for (let c = 0; c < n; c++) {
         const from = cw[c] * stride + ch.offset;
         for (let j = 0; j < k; j++) out[c * k + j] = vals[from + j];
       }
+      if (remap) for (let i = 0; i < n * k; i++) out[i] = (out[i] - remap.offset[i % 2]) / remap.scale[i % 2];
     }
     if (this.vnormal) {
       const vn = this.computeNormals(this.vnormal), out = g.attributes.normal.array;
@@ -341,6 +349,26 @@ export class ProgressiveMesh extends EventDispatcher {
       a.needsUpdate = true;
     }
     g.setDrawRange(0, n);
+  }
+
+  // The KHR_texture_transform ({offset, scale}) of the streamed
+  // primitive's material on a texture reading TEXCOORD_0, when the file
+  // stores TEXCOORD_0 as normalized u16; else null.
+  uvTransform() {
+    const json = this.json, prim = json.meshes[this.found.mesh].primitives[this.found.primitive];
+    const acc = json.accessors[prim.attributes.TEXCOORD_0];
+    if (!acc || acc.componentType !== 5123 || !acc.normalized || prim.material === undefined) return null;
+    const find = (o) => {
+      if (!o || typeof o !== "object") return null;
+      for (const [k, v] of Object.entries(o)) {
+        const t = k.endsWith("Texture") && v && v.index !== undefined && (v.texCoord || 0) === 0
+          && v.extensions && v.extensions.KHR_texture_transform;
+        const r = t ? { offset: t.offset || [0, 0], scale: t.scale || [1, 1] } : find(v);
+        if (r) return r;
+      }
+      return null;
+    };
+    return find((json.materials || [])[prim.material]);
   }
 
   // The base vertices' positions.
@@ -596,7 +624,9 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
     node.mesh = found.mesh;
     delete node.extensions.MSFT_lod;
   }
-  const [lo, hi] = meshRange(json, found.mesh);
+  // from the start of the binary chunk: lodgen puts the data no level owns
+  // (images, skins, animations) first, then the coarsest level
+  const hi = meshRange(json, found.mesh)[1], lo = 0;
   const bin = new Uint8Array(binLength);
   const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found });
   p.t0 = t0;
