@@ -45,8 +45,9 @@ tasks:
 
   layout                  files ≤ 800 lines, functions ≤ 120 lines outside tests, no module cycles
                           (crates/*/src, xtask/src)
-  attributes [--half-edge] [--attribute-weights=LIST]
-                          UV / normal error of lodgen vs meshopt simplify_with_attributes on spot.obj";
+  attributes [--mesh NAME] [--half-edge] [--attribute-weights=LIST]
+                          UV / normal error of lodgen vs meshopt simplify_with_attributes on a shared
+                          mesh (default spot; beetle: its own hard-edged normals)";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
