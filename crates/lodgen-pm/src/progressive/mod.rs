@@ -152,6 +152,11 @@ impl Log {
         }
     }
 
+    /// Room for `n` more corners.
+    pub fn reserve_corners(&mut self, n: usize) {
+        self.corners.reserve(n);
+    }
+
     /// The next corner's index, for `Contraction::moved`.
     pub fn mark(&self) -> u32 {
         self.corners.len() as u32
@@ -197,6 +202,22 @@ impl Log {
         }
         let e = [vw[v0 as usize], vw[v1 as usize]];
         self.wedges.resize(self.corners.len() - 1, e);
+    }
+
+    /// Rewrites the corner arena in record order, after `records` were
+    /// reordered (`moved` ranges pointing anywhere into the arena): each
+    /// record's corners then follow the previous record's, as `push_corner`
+    /// leaves them (`pop` and `spell_out_wedges` rely on it). Without
+    /// wedge edits (they are not reordered).
+    pub fn reorder_corners(&mut self) {
+        debug_assert!(self.wedges.is_empty());
+        let mut corners = Vec::with_capacity(self.corners.capacity());
+        for r in &mut self.records {
+            let start = corners.len() as u32;
+            corners.extend_from_slice(&self.corners[r.moved.start as usize..r.moved.end as usize]);
+            r.moved = start..corners.len() as u32;
+        }
+        self.corners = corners;
     }
 
     /// Remove the newest record and its corners.

@@ -194,8 +194,7 @@ impl Simplifier {
             self.quadric[v] = q;
         }
         drop(home);
-        self.merge_logs(&done);
-        drop(done);
+        self.merge_logs(done);
         let alive = &self.tri_alive;
         self.vtris = Fans::new(nv, &self.tris, |t| alive[t]);
     }
@@ -399,49 +398,84 @@ impl Simplifier {
     /// of the errors of the cluster's round (so a prefix of a round is
     /// about as even in error as a pass's), then by cluster and step (so
     /// each cluster keeps its own order).
-    fn merge_logs(&mut self, done: &[Done]) {
+    ///
+    /// Memory: the records are appended in cluster order, each cluster's
+    /// log freed once copied, then permuted into the merged order in place
+    /// and the corners rewritten in that order (the clusters' logs and the
+    /// merged one were both alive: bunny-4m's run peaked here).
+    fn merge_logs(&mut self, done: Vec<Done>) {
+        debug_assert!(self.log.records.is_empty() && self.log.mark() == 0);
         let total: usize = done.iter().map(|d| d.log.records.len()).sum();
+        let corners: usize = done.iter().map(|d| d.log.mark() as usize).sum();
         let mut order: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(total);
+        let mut first = 0;
         for (c, d) in done.iter().enumerate() {
             let mut from = 0;
             for (k, &to) in d.rounds.iter().enumerate() {
                 let mut run = 0;
                 for i in from..to {
                     run = f32_order_key(d.log.records[i as usize].error).max(run);
-                    order.push((k as u32, run, c as u32, i));
+                    order.push((k as u32, run, c as u32, first + i));
                 }
                 from = to;
             }
+            first += d.log.records.len() as u32;
         }
         order.par_sort_unstable();
+        // the merged order as positions in the clusters' concatenation
+        let mut perm: Vec<u32> = order.iter().map(|o| o.3).collect();
+        drop(order);
         self.log.records.reserve(total);
-        for (_, _, c, i) in order {
-            let d = &done[c as usize];
-            let r = &d.log.records[i as usize];
-            let mark = self.log.mark();
-            for k in d.log.moved(r) {
-                self.log.push_corner(Corner {
-                    triangle: d.start + k.triangle,
-                    slot: k.slot,
+        self.log.reserve_corners(corners);
+        for d in done {
+            for r in &d.log.records {
+                let mark = self.log.mark();
+                for k in d.log.moved(r) {
+                    self.log.push_corner(Corner {
+                        triangle: d.start + k.triangle,
+                        slot: k.slot,
+                    });
+                }
+                let removed: SmallVec<[u32; 2]> = r.removed.iter().map(|&t| d.start + t).collect();
+                self.log.records.push(Contraction {
+                    v0: d.verts[r.v0 as usize],
+                    v1: d.verts[r.v1 as usize],
+                    p1: r.p1,
+                    removed: Removed::new(&removed),
+                    moved: mark..self.log.mark(),
+                    error: r.error,
                 });
             }
-            let removed: SmallVec<[u32; 2]> = r.removed.iter().map(|&t| d.start + t).collect();
-            let (v0, v1) = (d.verts[r.v0 as usize], d.verts[r.v1 as usize]);
-            if let Some(f) = &mut self.features {
-                // the feature lines as the contractions in this order
-                // leave them (the clusters' edits of a held vertex's
-                // neighbours, e.g. along an open border, meet here)
-                f.contract(v0, v1);
-            }
-            self.log.records.push(Contraction {
-                v0,
-                v1,
-                p1: r.p1,
-                removed: Removed::new(&removed),
-                moved: mark..self.log.mark(),
-                error: r.error,
-            });
         }
+        permute(&mut self.log.records, &mut perm);
+        drop(perm);
+        self.log.reorder_corners();
+        if let Some(f) = &mut self.features {
+            // the feature lines as the contractions in this order leave
+            // them (the clusters' edits of a held vertex's neighbours,
+            // e.g. along an open border, meet here)
+            for r in &self.log.records {
+                f.contract(r.v0, r.v1);
+            }
+        }
+    }
+}
+
+/// Reorders `items` in place so that item `j` becomes the one at
+/// `perm[j]` (a permutation of `0..items.len()`), one cycle at a time by
+/// swaps; `perm` is consumed (entries set to `u32::MAX` once placed).
+fn permute<T>(items: &mut [T], perm: &mut [u32]) {
+    debug_assert_eq!(items.len(), perm.len());
+    for j in 0..perm.len() {
+        let mut k = j;
+        // (the item due at `k` is `perm[k]`; `j`'s old item travels along)
+        while perm[k] != u32::MAX && perm[k] as usize != j {
+            let src = perm[k] as usize;
+            items.swap(k, src);
+            perm[k] = u32::MAX;
+            k = src;
+        }
+        perm[k] = u32::MAX;
     }
 }
 
@@ -634,6 +668,39 @@ mod tests {
             }
             None => assert!(f.corners_implied),
         }
+    }
+
+    /// `permute` puts item `perm[j]` at `j` for permutations made of
+    /// fixed points, one long cycle and many short ones; fails when a
+    /// cycle is followed the wrong way (`items[perm[j]] = items[j]`) or
+    /// left unfinished.
+    #[test]
+    fn permute_places_each_item_where_the_permutation_says() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for n in [0usize, 1, 2, 7, 1000] {
+            let mut perm: Vec<u32> = (0..n as u32).collect();
+            // a shuffle, leaving some fixed points
+            for i in (1..n).rev() {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                if x % 5 != 0 {
+                    perm.swap(i, (x % (i as u64 + 1)) as usize);
+                }
+            }
+            let items: Vec<String> = (0..n).map(|i| format!("item {i}")).collect();
+            let want: Vec<String> = perm.iter().map(|&p| items[p as usize].clone()).collect();
+            let mut got = items.clone();
+            let mut p = perm.clone();
+            permute(&mut got, &mut p);
+            assert_eq!(got, want, "n = {n}");
+        }
+        // one cycle through every item
+        let n = 10u32;
+        let mut perm: Vec<u32> = (0..n).map(|j| (j + 3) % n).collect();
+        let mut got: Vec<u32> = (0..n).collect();
+        permute(&mut got, &mut perm);
+        assert_eq!(got, (0..n).map(|j| (j + 3) % n).collect::<Vec<_>>());
     }
 
     /// Fails if `Quadric` gains a field whose default is not all-zero bits.
