@@ -172,11 +172,16 @@ impl Simplifier {
     pub(super) fn start_pass(&mut self, factor: f32, bounded: bool) {
         let t0 = Instant::now();
         // The costing reads every live vertex's fan and skips its dead
-        // triangles; once the rewritten lists reach half the CSR it also
-        // writes the live ones out, and they become the new CSR (compacted
-        // where they are read anyway, not by a pass over all triangles).
+        // triangles; once any list was rewritten it also writes the live
+        // ones out, and they become the new CSR (compacted where they are
+        // read anyway, not by a pass over all triangles). Every pass but
+        // the first (the fans `new` builds are compact) so reads the fans
+        // in vertex order, not the contractions' scattered rewrites: −3 %
+        // CPU on the bunny to 2 % than compacting only once the rewrites
+        // reached half the CSR (`RAYON_NUM_THREADS=1 cpu_simplify
+        // bunny.obj 0 25 wedges 0.02`, alternating, median 93.5 → 90.3 ms).
         // (The fans `new` builds are compact: the first pass never does.)
-        let compact = self.vtris.half_dead();
+        let compact = self.vtris.rewritten_any();
         // the last pass's list is not read again: freed before this pass's
         // parts are made (peak memory: the two were the second pass's
         // peak), `Buckets::scatter` allocates the new one at its size
@@ -321,19 +326,24 @@ impl Simplifier {
             // in (a, b) order: the buckets keep it, and a stable
             // sort by cost then gives the total order
             nb.sort_unstable();
+            // (what is v's, once)
+            let v_locked = self.locked[vi];
+            let v_lanes = lanes_apply && self.free(v);
+            let (qv, pv) = (&self.quadric[vi], dv(self.pos[vi]));
             for &x in &nb {
-                if self.locked[vi] && self.locked[x as usize] {
+                let xi = x as usize;
+                if v_locked && self.locked[xi] {
                     continue;
                 }
-                if lanes_apply && self.free(v) && self.free(x) {
+                if v_lanes && self.free(x) {
                     slots[lanes.len()] = out.len();
                     out.push(PassEntry {
                         cost: 0.0,
                         a: v,
                         b: x,
                     });
-                    let q = self.quadric[vi] + self.quadric[x as usize];
-                    lanes.push(&q, dv(self.pos[vi]), dv(self.pos[x as usize]));
+                    let q = *qv + self.quadric[xi];
+                    lanes.push(&q, pv, dv(self.pos[xi]));
                     if lanes.is_full() {
                         flush(&mut lanes, &mut out, &slots);
                     }
