@@ -475,3 +475,34 @@ fn a_triangular_hole_closes() {
         assert_eq!(out.pm.full_in_input_order(), welded.mesh);
     }
 }
+
+#[test]
+fn fins_contract_along_the_edges_they_share() {
+    // three and four fins on one chain of 8 edges (each of 3 or 4 faces):
+    // the link test for edges of k faces lets the chain shorten, each such
+    // contraction deleting k faces and its split restoring them (fails
+    // when edges of three or more faces are refused: the chain keeps its 8
+    // edges and no split has more than two faces)
+    for k in [3, 4] {
+        let m = common::fins(k, 8, 3, 0.3, 0.02, 7);
+        assert_eq!(common::edges_of_three_faces(&m).len(), 8);
+        for schedule in SCHEDULES {
+            let out = run(
+                &m,
+                SimplifyOptions::DEFAULT
+                    .with_schedule(schedule)
+                    .with_target_triangles(0),
+            );
+            let wide = out.pm.splits.iter().filter(|s| s.faces.len() == k as usize);
+            assert!(wide.count() >= 4, "{k} fins, {schedule:?}");
+            assert!(out.pm.splits.iter().all(|s| s.faces.len() <= k as usize));
+            let chain = common::edges_of_three_faces(&out.pm.base).len();
+            assert!(
+                chain <= 4,
+                "{k} fins, {schedule:?}: {chain} chain edges left"
+            );
+            let welded = prepare(&m.positions, &m.indices()).unwrap();
+            assert_eq!(out.pm.full_in_input_order(), welded.mesh);
+        }
+    }
+}

@@ -724,3 +724,17 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn splits_restoring_three_or_four_faces_round_trip() {
+    // fins sharing a chain of non-manifold edges: splits restore k faces,
+    // whose codes past the second go to the escape column and whose corner
+    // edits the arc prediction may miss (fails if the decoder read two
+    // faces per record at most, or the encoder dropped the others)
+    for k in [3, 4] {
+        let m = common::fins(k, 8, 3, 0.3, 0.02, 11);
+        let pm = pm_of(&m, SimplifyOptions::DEFAULT.with_target_triangles(0));
+        assert!(pm.splits.iter().any(|s| s.faces.len() == k as usize));
+        assert_round_trip(&pm, EncodeOptions::DEFAULT);
+    }
+}

@@ -311,10 +311,10 @@ impl Engine {
         let cost = q.eval(p);
         let error = q.distance(cost);
         let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error as f32);
-        for &t in &record.removed {
+        for &t in &removed {
             self.tri_alive[t as usize] = false;
         }
-        self.live_tris -= record.removed.len();
+        self.live_tris -= removed.len();
         for k in 0..self.vtris[i0].len() {
             let t = self.vtris[i0][k];
             if !self.tri_alive[t as usize] {
@@ -346,13 +346,13 @@ impl Engine {
             for k in self.log.moved(&c) {
                 self.tris[k.triangle as usize][k.slot as usize] = c.v0;
             }
-            self.log.pop();
-            let keep = self.vtris[i1].len() - c.moved.len();
-            self.vtris[i1].truncate(keep);
-            for &t in &c.removed {
+            for &t in self.log.removed(&c) {
                 self.tri_alive[t as usize] = true;
             }
             self.live_tris += c.removed.len();
+            self.log.pop();
+            let keep = self.vtris[i1].len() - c.moved.len();
+            self.vtris[i1].truncate(keep);
             self.pos[i1] = c.p1;
             self.alive[i0] = true;
             if let Some(q) = self.saved_quadric.pop() {

@@ -73,9 +73,12 @@ pub(crate) struct Contraction {
     pub error: f32,
 }
 
-/// The triangles a contraction deletes: at most two (a τ pair deletes
-/// none, a border edge one). 12 bytes, where a `SmallVec` took 32: the log
-/// holds one per contraction.
+/// The triangles a contraction deletes: two for an interior edge, one on a
+/// border, none for a τ pair, inline (12 bytes, where a `SmallVec` took
+/// 32: the log holds one per contraction); `k ≥ 3` for an edge of `k`
+/// faces (rare: a chain of non-manifold edges), then `t[0]` is where they
+/// start in the log's [`Log::more_removed`]. Read them with
+/// [`Log::removed`].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Removed {
     t: [u32; 2],
@@ -83,29 +86,9 @@ pub(crate) struct Removed {
 }
 
 impl Removed {
-    /// Panics beyond two triangles (the link condition rejects those).
-    pub fn new(ts: &[u32]) -> Removed {
-        let mut t = [u32::MAX; 2];
-        t[..ts.len()].copy_from_slice(ts);
-        Removed {
-            t,
-            n: ts.len() as u32,
-        }
-    }
-}
-
-impl std::ops::Deref for Removed {
-    type Target = [u32];
-    fn deref(&self) -> &[u32] {
-        &self.t[..self.n as usize]
-    }
-}
-
-impl<'a> IntoIterator for &'a Removed {
-    type Item = &'a u32;
-    type IntoIter = std::slice::Iter<'a, u32>;
-    fn into_iter(self) -> Self::IntoIter {
-        self.iter()
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.n as usize
     }
 }
 
@@ -121,6 +104,9 @@ pub(crate) struct Log {
     /// Parallel to `corners` when wedges are tracked: `[before, after]`
     /// the contraction. Empty otherwise.
     pub wedges: Vec<[u32; 2]>,
+    /// The deleted triangles of the contractions along edges of three or
+    /// more faces (see [`Removed`]).
+    more_removed: Vec<u32>,
 }
 
 impl Log {
@@ -129,13 +115,39 @@ impl Log {
             records: Vec::with_capacity(contractions),
             corners: Vec::with_capacity(contractions * 9 / 2),
             wedges: Vec::new(),
+            more_removed: Vec::new(),
+        }
+    }
+
+    /// `ts` as a record's [`Removed`] (three or more kept in this log).
+    pub fn removed_of(&mut self, ts: &[u32]) -> Removed {
+        let mut t = [u32::MAX; 2];
+        if ts.len() <= 2 {
+            t[..ts.len()].copy_from_slice(ts);
+        } else {
+            t[0] = self.more_removed.len() as u32;
+            self.more_removed.extend_from_slice(ts);
+        }
+        Removed {
+            t,
+            n: ts.len() as u32,
+        }
+    }
+
+    /// The triangles `c` deleted.
+    #[inline]
+    pub fn removed<'a>(&'a self, c: &'a Contraction) -> &'a [u32] {
+        let r = &c.removed;
+        match r.n {
+            0..=2 => &r.t[..r.n as usize],
+            n => &self.more_removed[r.t[0] as usize..(r.t[0] + n) as usize],
         }
     }
 
     /// The record of contracting `v0` into `v1` (at `p1` before it),
     /// deleting `removed`, its moved corners to be pushed next.
     pub fn begin(
-        &self,
+        &mut self,
         v0: u32,
         v1: u32,
         p1: [f32; 3],
@@ -146,7 +158,7 @@ impl Log {
             v0,
             v1,
             p1,
-            removed: Removed::new(removed),
+            removed: self.removed_of(removed),
             moved: self.mark()..self.mark(),
             error,
         }
@@ -224,6 +236,9 @@ impl Log {
     pub fn pop(&mut self) -> Option<Contraction> {
         let c = self.records.pop()?;
         self.corners.truncate(c.moved.start as usize);
+        if c.removed.n > 2 {
+            self.more_removed.truncate(c.removed.t[0] as usize);
+        }
         self.wedges
             .truncate(self.wedges.len().min(c.moved.start as usize));
         Some(c)
@@ -253,7 +268,7 @@ impl ProgressiveMesh {
             triangle_origin,
             base_vertices,
             base_triangles,
-        } = Numbering::of(vertex_alive, triangle_alive, records);
+        } = Numbering::of(vertex_alive, triangle_alive, log);
         let map = |t: &[u32; 3]| t.map(|v| vnew[v as usize]);
         // The final state's corners, and the corners as they were when each
         // removed triangle died, are both in `triangles` (dead triangles are
@@ -517,7 +532,7 @@ struct Numbering {
 }
 
 impl Numbering {
-    fn of(vertex_alive: &[bool], triangle_alive: &[bool], records: &[Contraction]) -> Numbering {
+    fn of(vertex_alive: &[bool], triangle_alive: &[bool], log: &Log) -> Numbering {
         const NONE: u32 = u32::MAX;
         let mut vnew = vec![NONE; vertex_alive.len()];
         let mut tnew = vec![NONE; triangle_alive.len()];
@@ -537,10 +552,10 @@ impl Numbering {
         }
         let base_vertices = vertex_origin.len();
         let base_triangles = triangle_origin.len();
-        for c in records.iter().rev() {
+        for c in log.records.iter().rev() {
             vnew[c.v0 as usize] = vertex_origin.len() as u32;
             vertex_origin.push(c.v0);
-            for &t in &c.removed {
+            for &t in log.removed(c) {
                 tnew[t as usize] = triangle_origin.len() as u32;
                 triangle_origin.push(t);
             }
@@ -614,7 +629,7 @@ impl SplitBuilder<'_> {
         // as sorting the whole tuples, for less)
         corners.sort_unstable_by_key(|c| c.0.triangle);
         let split_wedges = self.wedges.map(|w| SplitWedges {
-            faces: c.removed.iter().map(|&t| w[t as usize]).collect(),
+            faces: log.removed(c).iter().map(|&t| w[t as usize]).collect(),
             corners: corners.iter().map(|c| c.1).collect(),
         });
         let split = VertexSplit {
@@ -623,8 +638,8 @@ impl SplitBuilder<'_> {
             p1: c.p1,
             p_merged,
             p0: self.positions[c.v0 as usize],
-            faces: c
-                .removed
+            faces: log
+                .removed(c)
                 .iter()
                 .map(|&t| map(&self.triangles[t as usize]))
                 .collect(),
@@ -644,7 +659,7 @@ impl SplitBuilder<'_> {
         let n = records.len();
         if k + 8 < n {
             let c = &records[n - 1 - (k + 8)];
-            for &t in &c.removed {
+            for &t in self.log.removed(c) {
                 prefetch(&self.triangles[t as usize]);
             }
             for x in self.log.moved(c) {
@@ -655,7 +670,7 @@ impl SplitBuilder<'_> {
             prefetch(&vnew[c.v1 as usize]);
         }
         if k + 4 < n {
-            for &t in &records[n - 1 - (k + 4)].removed {
+            for &t in self.log.removed(&records[n - 1 - (k + 4)]) {
                 for &x in &self.triangles[t as usize] {
                     prefetch(&vnew[x as usize]);
                 }

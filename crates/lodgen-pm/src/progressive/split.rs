@@ -39,7 +39,8 @@ pub struct VertexSplit {
     pub p0: [f32; 3],
     /// The triangles the contraction deleted, restored by the split in this
     /// order: two for an interior edge (`fl`, `fr`), one on a border, none
-    /// for a non-edge (τ) pair.
+    /// for a non-edge (τ) pair, `k ≥ 3` for an edge of `k` faces (where
+    /// sheets meet along a non-manifold edge; rare, inline up to two).
     pub faces: SmallVec<[[u32; 3]; 2]>,
     /// The corners that go from `v1` back to `v0`, sorted (packed, inline
     /// up to six, which is most splits: no allocation per split).

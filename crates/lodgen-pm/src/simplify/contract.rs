@@ -39,10 +39,10 @@ impl Simplifier {
             None
         };
         let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error);
-        for &t in &record.removed {
+        for &t in &removed {
             self.tri_alive[t as usize] = false;
         }
-        self.live_tris -= record.removed.len();
+        self.live_tris -= removed.len();
         self.move_fan(v0, v1, &edits);
         self.pos[i1] = merged;
         let q0 = self.quadric[i0];
@@ -66,7 +66,7 @@ impl Simplifier {
         if let Some(at) = &mut self.attributes {
             let w = self.features.as_ref().and_then(|f| f.wedges.as_deref());
             let e = edits.as_ref().map_or(&[][..], |e| &e.0[..]);
-            at.contract(v0, v1, &record.removed, e, &self.tris, w);
+            at.contract(v0, v1, &removed, e, &self.tris, w);
         }
         self.merge_partners(v0, v1);
         record.moved.end = self.log.mark();

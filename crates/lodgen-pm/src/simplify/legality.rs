@@ -68,11 +68,29 @@ impl<F: FanLookup + ?Sized> Copy for Faces<'_, F> {}
 /// triangles on both (deleted by the contraction), their third vertices,
 /// and how many distinct vertices besides the two are on both one-rings.
 /// The condition holds when `common == shared.len()` and the opposite
-/// vertices differ.
+/// vertices differ ([`Link::holds`]): the common neighbours are exactly the
+/// opposite vertices, for an edge of any number of faces (two inside a
+/// surface, one on its border, three or more where sheets meet along a
+/// non-manifold edge).
 pub(crate) struct Link {
     pub shared: SmallVec<[u32; 2]>,
     pub opposite: SmallVec<[u32; 2]>,
     pub common: usize,
+}
+
+impl Link {
+    /// The vertex half of the link condition (Dey et al. 1999, "Topology
+    /// preserving edge contraction"): the one-rings of `v0` and `v1` share
+    /// the opposite vertices and nothing else, and these are distinct (two
+    /// faces on the edge with one third vertex are a duplicate face). The
+    /// edge half (no edge `o_i o_j` on both one-rings, or two moved faces
+    /// would coincide) is `moved_faces_ok`'s duplicate test, and the border
+    /// half (both ends on a border, joined by an edge that is not a border
+    /// edge, would pinch) is the caller's.
+    pub fn holds(&self) -> bool {
+        let o = &self.opposite;
+        self.common == self.shared.len() && (1..o.len()).all(|i| !o[..i].contains(&o[i]))
+    }
 }
 
 /// The [`Link`] of `v0` and `v1` (on this thread's vertex marks: it only
@@ -96,9 +114,6 @@ pub(crate) fn link<F: FanLookup + ?Sized>(f: Faces<'_, F>, v0: u32, v1: u32) -> 
             for &x in &tri {
                 mark[x as usize] = g;
             }
-        }
-        if shared.len() > 2 {
-            return 0; // fails anyway
         }
         let mut common = 0;
         for &t in f.vtris.fan(v1) {
@@ -187,6 +202,33 @@ pub(crate) fn closing_hole<F: FanLookup + ?Sized>(
     found
 }
 
+/// Whether contracting `v0` into `v1` would merge two edges of three or
+/// more faces into one: `(v0, o)` and `(v1, o)` for an opposite vertex `o`
+/// (a triangle `v0 v1 o` with sheets meeting along both other edges). The
+/// link condition allows it, but the merged edge gets the faces of both
+/// (four or more: beetle.obj's chains of edges of three faces that turn
+/// around a triangle would fuse), so the contraction is refused.
+pub(crate) fn fuses_odd_edges<F: FanLookup + ?Sized>(
+    f: Faces<'_, F>,
+    v0: u32,
+    v1: u32,
+    opposite: &[u32],
+) -> bool {
+    let faces_on = |v: u32, o: u32| {
+        f.vtris
+            .fan(v)
+            .iter()
+            .filter(|&&t| {
+                let tri = f.tris[t as usize];
+                f.alive[t as usize] && tri.contains(&v) && tri.contains(&o)
+            })
+            .count()
+    };
+    opposite
+        .iter()
+        .any(|&o| faces_on(v0, o) >= 3 && faces_on(v1, o) >= 3)
+}
+
 /// Whether `v` has an open border edge (one live face) in its fan.
 pub(crate) fn on_border<F: FanLookup + ?Sized>(f: Faces<'_, F>, v: u32) -> bool {
     let live: SmallVec<[[u32; 3]; 16]> = f
@@ -254,16 +296,18 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
         }
     }
     // With the link condition, a moved face `v0 x y` can only land on an
-    // existing `v1 x y` when x and y are the two opposite vertices.
-    if let &[o1, o2] = opposite {
-        let has_face = |v: u32| {
-            f.vtris.fan(v).iter().any(|&t| {
-                let tri = f.tris[t as usize];
-                f.alive[t as usize] && tri.contains(&o1) && tri.contains(&o2)
-            })
-        };
-        if has_face(v0) && has_face(v1) {
-            return Err(Rejected::Duplicate);
+    // existing `v1 x y` when x and y are two of the opposite vertices.
+    for (i, &o1) in opposite.iter().enumerate() {
+        for &o2 in &opposite[i + 1..] {
+            let has_face = |v: u32| {
+                f.vtris.fan(v).iter().any(|&t| {
+                    let tri = f.tris[t as usize];
+                    f.alive[t as usize] && tri.contains(&o1) && tri.contains(&o2)
+                })
+            };
+            if has_face(v0) && has_face(v1) {
+                return Err(Rejected::Duplicate);
+            }
         }
     }
     Ok(())

@@ -46,7 +46,7 @@
 
 use super::{Pass, Simplifier, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
-use crate::progressive::{Contraction, Corner, Log, Removed};
+use crate::progressive::{Contraction, Corner, Log};
 use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
 use crate::simplify::quadric::Quadric;
 use crate::simplify::schedule::{pass_bucket, pass_order};
@@ -436,12 +436,14 @@ impl Simplifier {
                         slot: k.slot,
                     });
                 }
-                let removed: SmallVec<[u32; 2]> = r.removed.iter().map(|&t| d.start + t).collect();
+                let removed: SmallVec<[u32; 2]> =
+                    d.log.removed(r).iter().map(|&t| d.start + t).collect();
+                let removed = self.log.removed_of(&removed);
                 self.log.records.push(Contraction {
                     v0: d.verts[r.v0 as usize],
                     v1: d.verts[r.v1 as usize],
                     p1: r.p1,
-                    removed: Removed::new(&removed),
+                    removed,
                     moved: mark..self.log.mark(),
                     error: r.error,
                 });

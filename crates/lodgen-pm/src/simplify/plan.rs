@@ -3,7 +3,7 @@
 //! contraction is legal ([`super::legality`]). Reads nothing outside the
 //! closed one-rings of the pair (what the batched walk relies on).
 
-use super::legality::{link, moved_faces_ok, Faces, Link};
+use super::legality::{fuses_odd_edges, link, moved_faces_ok, Faces};
 use super::reach::REACH_GATE;
 use super::{dv, Plan, Rejected, Simplifier};
 use crate::mesh::adjacency::FanLookup;
@@ -84,22 +84,25 @@ impl Simplifier {
             vtris: &self.vtris,
             pos: &self.pos,
         };
-        let Link {
-            shared,
-            opposite,
-            common,
-        } = link(faces, v0, v1);
-        if shared.len() == 2 && self.boundary[i0] && self.boundary[i1] {
+        let l = link(faces, v0, v1);
+        // an edge of two or more faces (inside a surface, or where three or
+        // more sheets meet) is no border edge: with both ends on a border
+        // the contraction would pinch
+        if l.shared.len() >= 2 && self.boundary[i0] && self.boundary[i1] {
             return Err(Rejected::BoundaryPinch);
         }
-        if shared.len() > 2 {
+        // (a vertex on an edge of three or more faces is a corner, and so
+        // is whatever it is contracted into: only corner pairs can fuse)
+        if !l.holds()
+            || (!l.shared.is_empty()
+                && self.corner[i0]
+                && self.corner[i1]
+                && fuses_odd_edges(faces, v0, v1, &l.opposite))
+        {
             return Err(Rejected::Link);
         }
-        if common != shared.len() || (opposite.len() == 2 && opposite[0] == opposite[1]) {
-            return Err(Rejected::Link);
-        }
-        moved_faces_ok(faces, v0, v1, p, &opposite)?;
-        Ok(shared)
+        moved_faces_ok(faces, v0, v1, p, &l.opposite)?;
+        Ok(l.shared)
     }
 
     /// Prefetch what planning the pair `(a, b)` reads first about its

@@ -31,12 +31,14 @@ impl Simplifier {
         // A non-manifold vertex (on an edge of three or more faces, or
         // where several fans meet) follows the border corners' rule: it
         // never moves to a new position, but a neighbour may be pulled onto
-        // it or it may be removed into a neighbour (never across an edge of
-        // three faces: the link test refuses it). It used to be locked: beetle.obj
-        // (47 edges of three faces, 45 such vertices) stopped at 181
-        // triangles of its 2 % (41) and its 10 % level had Hausdorff 5.64 %
-        // / RMS 1.21 % against meshopt's 2.13 / 0.58 (`cargo xtask quality
-        // --quick --meshes beetle`: now 4.24 / 0.79, 166 triangles at 2 %).
+        // it or it may be removed into a neighbour, along an edge of three
+        // or more faces too when the link condition holds for it (a chain
+        // of such edges shortens like a border line). It used to be locked,
+        // then such edges were refused: beetle.obj (47 edges of three faces,
+        // 45 such vertices) stopped at 181, then 166 triangles of its 2 %
+        // (41) and its 10 % level had Hausdorff 5.64, then 4.24 % (`cargo
+        // xtask quality --quick --meshes beetle`; 2.89 % now, see
+        // docs/quality.md).
         for (c, &x) in corner.iter_mut().zip(&complex) {
             *c |= x;
         }

@@ -69,3 +69,87 @@ pub fn directed_edges(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
     e.sort_unstable();
     e
 }
+
+/// `fins` strips of `rows` × `chain` quads sharing one chain of `chain + 1`
+/// vertices along x: each chain edge has `fins` faces (a non-manifold edge,
+/// as where beetle.obj's panels meet its body). Fin `i` leaves the chain at
+/// angle `2π i / fins` (plus `twist`) around x and bends a little (so its
+/// vertices are not all coplanar); `noise` jitters every vertex but the
+/// chain's ends (seeded, deterministic).
+pub fn fins(
+    fins: u32,
+    chain: u32,
+    rows: u32,
+    twist: f32,
+    noise: f32,
+    seed: u64,
+) -> lodgen_pm::Mesh {
+    let mut s = seed;
+    let mut jitter = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        noise * (((s >> 40) as f32 / (1u64 << 24) as f32) - 0.5)
+    };
+    let mut positions: Vec<[f32; 3]> = (0..=chain)
+        .map(|j| {
+            let end = j == 0 || j == chain;
+            let (a, b) = if end {
+                (0.0, 0.0)
+            } else {
+                (jitter(), jitter())
+            };
+            [j as f32, a, b]
+        })
+        .collect();
+    let mut triangles = Vec::new();
+    let at = |i: u32, r: u32, j: u32| {
+        if r == 0 {
+            j
+        } else {
+            chain + 1 + (i * rows + r - 1) * (chain + 1) + j
+        }
+    };
+    for i in 0..fins {
+        let angle = std::f32::consts::TAU * i as f32 / fins as f32 + twist;
+        let (sin, cos) = angle.sin_cos();
+        for r in 1..=rows {
+            for j in 0..=chain {
+                let d = r as f32;
+                let bend = 0.15 * d * d / rows as f32 * ((j as f32) * 0.7).sin();
+                let (u, w) = (d + jitter(), bend + jitter());
+                positions.push([j as f32 + jitter(), u * cos - w * sin, u * sin + w * cos]);
+            }
+        }
+        for r in 0..rows {
+            for j in 0..chain {
+                let (a, b) = (at(i, r, j), at(i, r, j + 1));
+                let (c, d) = (at(i, r + 1, j), at(i, r + 1, j + 1));
+                triangles.push([a, b, d]);
+                triangles.push([a, d, c]);
+            }
+        }
+    }
+    lodgen_pm::Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// The edges of `m` with three or more faces, as sorted vertex pairs.
+pub fn edges_of_three_faces(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
+    let mut e: Vec<(u32, u32)> = m
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    e.sort_unstable();
+    let mut out: Vec<(u32, u32)> = e
+        .chunk_by(|a, b| a == b)
+        .filter(|run| run.len() >= 3)
+        .map(|run| run[0])
+        .collect();
+    out.dedup();
+    out
+}
