@@ -226,7 +226,7 @@ impl TriangleBvh {
 
     /// Build for a mesh that [`MeshRef::validate`] accepted.
     pub(crate) fn build_validated(mesh: MeshRef<'_>) -> TriangleBvh {
-        Self::from_zorder(mesh, &zorder::triangles(mesh))
+        Self::from_zorder(mesh, zorder::triangles(mesh))
     }
 
     /// Build for a validated mesh whose triangles' Z-order is `z`
@@ -235,7 +235,7 @@ impl TriangleBvh {
     /// halves; halves of the range when every code is equal). A sort and a linear pass instead
     /// of a surface-area sweep per level: ~10× cheaper to build, and the queries of sorted
     /// sample points walk neighbouring leaves.
-    pub(super) fn from_zorder(mesh: MeshRef<'_>, z: &ZOrder) -> TriangleBvh {
+    pub(super) fn from_zorder(mesh: MeshRef<'_>, z: ZOrder) -> TriangleBvh {
         debug_assert!(
             u32::try_from(z.ids.len()).is_ok(),
             "more than u32::MAX triangles"
@@ -245,6 +245,9 @@ impl TriangleBvh {
         // (the binary tree is collapsed and freed before the corners are copied into leaf
         // order: peak ≈ 65 instead of 100 bytes per triangle)
         let (nodes, depth) = morton_tree(&z.codes, corners);
+        // (the codes are not read again: freed before the collapse's peak)
+        let ZOrder { ids, codes } = z;
+        drop(codes);
         let root = nodes.first().copied();
         let query_nodes = if nodes.is_empty() {
             Vec::new()
@@ -252,7 +255,7 @@ impl TriangleBvh {
             collapse(&nodes)
         };
         drop(nodes);
-        let (tris, points) = leaf_order_indices(mesh, &z.ids);
+        let (tris, points) = leaf_order_indices(mesh, &ids);
         let Some(root) = root else {
             return TriangleBvh {
                 magnitude: 0.0,
@@ -277,7 +280,7 @@ impl TriangleBvh {
             depth,
             tris,
             points,
-            ids: z.ids.clone(),
+            ids,
         }
     }
 

@@ -176,11 +176,11 @@ impl<'a> Reference<'a> {
     }
 
     fn build_validated(a: MeshRef<'a>) -> Reference<'a> {
-        let z = zorder::triangles(a);
-        let (bvh, samples) = rayon::join(
-            || TriangleBvh::from_zorder(a, &z),
-            || SampleSet::new(a, &z.ids),
-        );
+        // (the sample set after the hierarchy, along its order, not beside
+        // it: at 4.4M triangles the two builds' buffers together were the
+        // whole run's peak)
+        let bvh = TriangleBvh::from_zorder(a, zorder::triangles(a));
+        let samples = SampleSet::new(a, bvh.order());
         Reference {
             mesh: a,
             bvh,
@@ -215,16 +215,20 @@ impl<'a> Reference<'a> {
     fn measure_validated(&self, b: MeshRef<'_>, opts: &MeasureOptions) -> ErrorReport {
         let a = self.mesh;
         let z = zorder::triangles(b);
+        let order = z.ids.clone();
+        // (B's sample set first: its sort's buffers beside B's hierarchy build were the
+        // measurement's peak)
+        let samples_b = SampleSet::new(b, &order);
         let (a_to_b, b_to_a) = rayon::join(
             || {
-                let bvh_b = TriangleBvh::from_zorder(b, &z);
+                let bvh_b = TriangleBvh::from_zorder(b, z);
                 let plan = Plan::new(opts, a.triangles.len(), b.triangles.len(), self.diagonal);
                 measure_from(a, self.bvh.order(), &self.samples, &bvh_b, &plan)
             },
             || {
                 let mut plan = Plan::new(opts, b.triangles.len(), a.triangles.len(), self.diagonal);
                 plan.seed ^= 0xb5ad_4ece_da1c_e2a9;
-                measure_from(b, &z.ids, &SampleSet::new(b, &z.ids), &self.bvh, &plan)
+                measure_from(b, &order, &samples_b, &self.bvh, &plan)
             },
         );
         ErrorReport {
