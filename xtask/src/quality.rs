@@ -299,26 +299,32 @@ pub fn run(args: &[String]) -> Result<()> {
         );
     }
     if !args.quick {
-        let docs = crate::workspace_root().join("docs");
-        plot(&docs.join("quality.png"), &args.meshes, &rows)?;
-        let md = docs.join("quality.md");
-        let old = std::fs::read_to_string(&md).unwrap_or_default();
-        let hand = old.find(HAND_WRITTEN).map_or("", |i| &old[i..]);
-        let note = format!(
-            "This table: `cargo xtask quality {}`; the Python peers ran for {rerun} of the {} \
-             cells, the others are the cells recorded at the same triangle count by earlier \
-             runs (`--fresh` runs them all).",
-            std::env::args().skip(2).collect::<Vec<_>>().join(" "),
-            rows.len()
-        );
-        std::fs::write(&md, report(&rows, samples, &note, hand))
-            .with_context(|| format!("writing {}", md.display()))?;
+        write_docs(&args.meshes, &rows, samples, rerun)?;
         if python.is_some() {
             write_recorded(&rows)?;
         }
         eprintln!("wrote docs/quality.md, docs/quality.png");
     }
     Ok(())
+}
+
+/// docs/quality.png and docs/quality.md (its hand-written part kept);
+/// `rerun`: the cells the Python peers ran for.
+fn write_docs(meshes: &[&str], rows: &[Row], samples: usize, rerun: usize) -> Result<()> {
+    let docs = crate::workspace_root().join("docs");
+    plot(&docs.join("quality.png"), meshes, rows)?;
+    let md = docs.join("quality.md");
+    let old = std::fs::read_to_string(&md).unwrap_or_default();
+    let hand = old.find(HAND_WRITTEN).map_or("", |i| &old[i..]);
+    let note = format!(
+        "This table: `cargo xtask quality {}`; the Python peers ran for {rerun} of the {} \
+         cells, the others are the cells recorded at the same triangle count by earlier \
+         runs (`--fresh` runs them all).",
+        std::env::args().skip(2).collect::<Vec<_>>().join(" "),
+        rows.len()
+    );
+    std::fs::write(&md, report(rows, samples, &note, hand))
+        .with_context(|| format!("writing {}", md.display()))
 }
 
 /// A recorded peer's cell.
