@@ -278,11 +278,9 @@ proptest! {
 
 #[test]
 fn the_batched_walk_contracts_exactly_what_stepping_does_on_the_cow() {
-    let Some(text) = common::shared_asset_text("cow.obj") else {
+    let Some(m) = common::shared_mesh("cow.obj") else {
         return;
     };
-    let (p, idx) = common::read_obj(&text);
-    let m = prepare(&p, &idx).unwrap().mesh;
     for ratio in [0.5, 0.02] {
         let (ran, stepped) =
             run_and_step(&m, &SimplifyOptions::DEFAULT.with_target_ratio(ratio), None);
@@ -405,11 +403,9 @@ fn beetle_contracts_along_its_edges_of_three_faces_and_replays_exactly() {
     // the contraction used to refuse (fails then: no split restores three
     // faces; 7 do at 2 %, 28-30 such edges left); check_fin_levels fails
     // without legality::fuses_odd_edges (an edge of four faces)
-    let Some(text) = common::shared_asset_text("beetle.obj") else {
+    let Some(m) = common::shared_mesh("beetle.obj") else {
         return;
     };
-    let (p, idx) = common::read_obj(&text);
-    let m = prepare(&p, &idx).unwrap().mesh;
     let chain = common::edges_of_three_faces(&m).len();
     assert_eq!(chain, 47);
     for greedy in [false, true] {

@@ -166,19 +166,11 @@ fn square_with_a_border_keeps_the_border_in_place() {
             );
             let base = &out.pm.base;
             // every border edge of the result lies on the original border
-            let mut e: Vec<(u32, u32)> = base
-                .triangles
-                .iter()
-                .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-                .map(|(a, b)| (a.min(b), a.max(b)))
+            let border: Vec<(u32, u32)> = common::edge_uses(base)
+                .into_iter()
+                .filter(|&(_, n)| n == 1)
+                .map(|(e, _)| e)
                 .collect();
-            e.sort_unstable();
-            let mut border = Vec::new();
-            for run in e.chunk_by(|a, b| a == b) {
-                if run.len() == 1 {
-                    border.push(run[0]);
-                }
-            }
             assert!(border.len() >= 4);
             // Corners never move; other border vertices take optimal
             // placement, which the constraint planes hold to the border
@@ -419,13 +411,9 @@ fn output_is_deterministic() {
 /// Fails when the walk ignores `Plan::deferred` (both runs then agree).
 #[test]
 fn reach_keeps_the_cow_tail_tip() {
-    let Some(text) = common::shared_asset_text("cow.obj") else {
+    let Some(m) = common::shared_mesh("cow.obj") else {
         return;
     };
-    let (positions, indices) = common::read_obj(&text);
-    let m = prepare(&positions, &indices)
-        .expect("cow.obj is valid")
-        .mesh;
     let half = |opts: SimplifyOptions| {
         let out = run(&m, opts.with_target_ratio(0.02));
         let mut c = out.pm.cursor();

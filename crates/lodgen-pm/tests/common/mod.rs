@@ -1,7 +1,7 @@
 //! Shared by the core's integration tests: locating `../shared/assets`
 //! (or `$LODGEN_ASSETS`), a minimal OBJ reader (`v`/`f` lines only; the
 //! core has no I/O, and the full readers live in the `lodgen` crate) and a
-//! mesh's directed edges. Each test binary uses part of it.
+//! mesh's edges. Each test binary uses part of it.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
@@ -136,8 +136,9 @@ pub fn fins(
     }
 }
 
-/// The edges of `m` with three or more faces, as sorted vertex pairs.
-pub fn edges_of_three_faces(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
+/// Each edge of `m` (a sorted vertex pair) with the number of faces using it,
+/// in edge order.
+pub fn edge_uses(m: &lodgen_pm::Mesh) -> Vec<((u32, u32), usize)> {
     let mut e: Vec<(u32, u32)> = m
         .triangles
         .iter()
@@ -145,11 +146,27 @@ pub fn edges_of_three_faces(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
         .map(|(a, b)| (a.min(b), a.max(b)))
         .collect();
     e.sort_unstable();
-    let mut out: Vec<(u32, u32)> = e
-        .chunk_by(|a, b| a == b)
-        .filter(|run| run.len() >= 3)
-        .map(|run| run[0])
-        .collect();
-    out.dedup();
-    out
+    e.chunk_by(|a, b| a == b)
+        .map(|run| (run[0], run.len()))
+        .collect()
+}
+
+/// The edges of `m` with three or more faces, as sorted vertex pairs.
+pub fn edges_of_three_faces(m: &lodgen_pm::Mesh) -> Vec<(u32, u32)> {
+    edge_uses(m)
+        .into_iter()
+        .filter(|&(_, n)| n >= 3)
+        .map(|(e, _)| e)
+        .collect()
+}
+
+/// A shared test mesh, welded and cleaned by `prepare` (`None` as for
+/// [`shared_asset_text`]).
+pub fn shared_mesh(name: &str) -> Option<lodgen_pm::Mesh> {
+    let (p, idx) = read_obj(&shared_asset_text(name)?);
+    Some(
+        lodgen_pm::prepare(&p, &idx)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .mesh,
+    )
 }
