@@ -212,6 +212,43 @@ proptest! {
 /// fins collapsed away) are at most the input's `chain`, never more at a
 /// coarser level than at the finer one (a fin folding onto another fin or
 /// onto itself makes a new one).
+/// A vertex of `m` whose faces form more than one fan (faces around it
+/// joined through the edges at it), as a pinch makes: `None` if none.
+fn vertex_of_two_fans(m: &lodgen_pm::Mesh) -> Option<u32> {
+    let mut ring: std::collections::BTreeMap<u32, Vec<(u32, u32)>> = Default::default();
+    for t in &m.triangles {
+        for i in 0..3 {
+            ring.entry(t[i])
+                .or_default()
+                .push((t[(i + 1) % 3], t[(i + 2) % 3]));
+        }
+    }
+    // the fans are the connected parts of the ring's graph (a face joins
+    // its two other corners)
+    ring.into_iter().find_map(|(v, faces)| {
+        let mut nodes: Vec<u32> = faces.iter().flat_map(|&(a, b)| [a, b]).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let mut parent: Vec<usize> = (0..nodes.len()).collect();
+        fn root(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        let at = |x: u32| nodes.binary_search(&x).unwrap_or(0);
+        for &(a, b) in &faces {
+            let (ra, rb) = (root(&mut parent, at(a)), root(&mut parent, at(b)));
+            parent[ra] = rb;
+        }
+        let fans = (0..nodes.len())
+            .filter(|&i| root(&mut parent, i) == i)
+            .count();
+        (fans > 1).then_some(v)
+    })
+}
+
 fn check_fin_levels(pm: &ProgressiveMesh, k: usize, chain: usize) {
     // fine to coarse: each contraction undone by the split at `applied()`
     let mut cursor = pm.cursor();
@@ -232,6 +269,9 @@ fn check_fin_levels(pm: &ProgressiveMesh, k: usize, chain: usize) {
         }
         assert!(odd <= before, "{odd} odd edges, {before} before {split:?}");
         before = odd;
+        if let Some(v) = vertex_of_two_fans(cursor.mesh()) {
+            panic!("vertex {v} pinched at {}: {split:?}", cursor.applied());
+        }
         if cursor.coarsen(1) == 0 {
             break;
         }
