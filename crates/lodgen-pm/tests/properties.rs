@@ -171,24 +171,7 @@ proptest! {
             .with_target_ratio(0.1)
             .with_tau(Tau::Absolute(tau))
             .with_schedule(schedule(greedy));
-        let mut s = Simplifier::new(&m, &opts).unwrap();
-        let mut snaps = vec![s.snapshot()];
-        while s.step().is_ok() {
-            snaps.push(s.snapshot());
-        }
-        let (pm, _) = s.finish();
-        for (c, snap) in snaps.iter().enumerate() {
-            let k = pm.len() - c;
-            let mesh = pm.mesh_at_splits(k);
-            let mut mapped: Vec<(u32, [u32; 3])> = mesh.triangles.iter().enumerate()
-                .map(|(i, t)| (pm.triangle_origin[i], t.map(|v| pm.vertex_origin[v as usize])))
-                .collect();
-            mapped.sort_unstable();
-            prop_assert_eq!(&mapped, &snap.triangles);
-            for (i, p) in mesh.positions.iter().enumerate() {
-                prop_assert_eq!(*p, snap.positions[pm.vertex_origin[i] as usize]);
-            }
-        }
+        check_snapshots(&m, &opts)?;
     }
 
     #[test]
@@ -212,6 +195,38 @@ proptest! {
 /// fins collapsed away) are at most the input's `chain`, never more at a
 /// coarser level than at the finer one (a fin folding onto another fin or
 /// onto itself makes a new one).
+/// Steps a simplifier over `m`, snapshotting each state, and checks that
+/// every snapshot is the level the finished log extracts at that step
+/// (triangles and positions, in input numbering).
+fn check_snapshots(m: &Mesh, opts: &SimplifyOptions) -> Result<(), TestCaseError> {
+    let mut s = Simplifier::new(m, opts).unwrap();
+    let mut snaps = vec![s.snapshot()];
+    while s.step().is_ok() {
+        snaps.push(s.snapshot());
+    }
+    let (pm, _) = s.finish();
+    for (c, snap) in snaps.iter().enumerate() {
+        let mesh = pm.mesh_at_splits(pm.len() - c);
+        let mut mapped: Vec<(u32, [u32; 3])> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                (
+                    pm.triangle_origin[i],
+                    t.map(|v| pm.vertex_origin[v as usize]),
+                )
+            })
+            .collect();
+        mapped.sort_unstable();
+        prop_assert_eq!(&mapped, &snap.triangles);
+        for (i, p) in mesh.positions.iter().enumerate() {
+            prop_assert_eq!(*p, snap.positions[pm.vertex_origin[i] as usize]);
+        }
+    }
+    Ok(())
+}
+
 /// A vertex of `m` whose faces form more than one fan (faces around it
 /// joined through the edges at it), as a pinch makes: `None` if none.
 fn vertex_of_two_fans(m: &lodgen_pm::Mesh) -> Option<u32> {
@@ -294,20 +309,7 @@ proptest! {
         check_levels(&out.pm, false);
         check_fin_levels(&out.pm, k as usize, chain as usize);
         prop_assert_eq!(out.pm.full_in_input_order(), m.clone());
-        let mut s = Simplifier::new(&m, &opts).unwrap();
-        let mut snaps = vec![s.snapshot()];
-        while s.step().is_ok() {
-            snaps.push(s.snapshot());
-        }
-        let (pm, _) = s.finish();
-        for (c, snap) in snaps.iter().enumerate() {
-            let mesh = pm.mesh_at_splits(pm.len() - c);
-            let mut mapped: Vec<(u32, [u32; 3])> = mesh.triangles.iter().enumerate()
-                .map(|(i, t)| (pm.triangle_origin[i], t.map(|v| pm.vertex_origin[v as usize])))
-                .collect();
-            mapped.sort_unstable();
-            prop_assert_eq!(&mapped, &snap.triangles);
-        }
+        check_snapshots(&m, &opts)?;
         let (a, b) = run_and_step(&m, &opts, None);
         prop_assert_eq!(a, b);
         let pm = partitioned(&m, &opts.with_target_ratio(ratio.min(0.1)), size, false);
