@@ -185,6 +185,14 @@ fn return_freed_memory(input_triangles: usize) {
     }
 }
 
+/// Below this many input triangles a mesh's original hierarchy is built
+/// while its levels are extracted, and its levels are measured side by side
+/// (both cores busy where one would wait: the bunny's measure phase). Larger
+/// meshes keep the sequential order, in which the progressive mesh is freed
+/// before the hierarchy is built and one level's hierarchy lives at a time
+/// (at 4.4M triangles those were the run's peak).
+const SIDE_BY_SIDE_MAX_TRIANGLES: usize = TRIM_MIN_TRIANGLES;
+
 /// [`build_one`]; an owned `mesh` has its input positions and indices
 /// freed once they are no longer read, unless [`BuildOptions::keep_input`].
 fn build_mesh(
@@ -217,7 +225,18 @@ fn build_mesh(
         })
     };
     let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
-    let extracted = extract_levels(mesh, &flat, &simplified, &splits, opts.measured);
+    let side_by_side = input_triangles < SIDE_BY_SIDE_MAX_TRIANGLES;
+    let extracted = if side_by_side {
+        // (the original's hierarchy built on the other core meanwhile)
+        let (extracted, prepared) = rayon::join(
+            || extract_levels(mesh, &flat, &simplified, &splits, opts.measured),
+            || measurer.prepare(),
+        );
+        prepared?;
+        extracted
+    } else {
+        extract_levels(mesh, &flat, &simplified, &splits, opts.measured)
+    };
     drop(flat);
     if let (false, Cow::Owned(m)) = (opts.keep_input, &mut *mesh) {
         if measurable(&full, &extracted) {
@@ -240,6 +259,7 @@ fn build_mesh(
         &splits,
         &opts.measure,
         &measurer,
+        side_by_side,
         &mut measuring,
     )?;
     let measure_time = measurer.time();
@@ -363,8 +383,9 @@ fn measurable(full: &Mesh, extracted: &[Extracted]) -> bool {
     ok(full) && extracted.iter().filter_map(|e| e.mesh.as_ref()).all(ok)
 }
 
-/// Every extracted level measured (its mesh freed once it is), then the
-/// screen coverages from the measured errors. `full` stands for a level
+/// Every extracted level measured (its mesh freed once it is; with
+/// `side_by_side`, all levels at once, their meshes freed together), then
+/// the screen coverages from the measured errors. `full` stands for a level
 /// without a mesh (the original, or not measured: its error does not read
 /// it).
 fn measure_levels(
@@ -373,14 +394,31 @@ fn measure_levels(
     splits: &[usize],
     mopts: &MeasureOptions,
     measurer: &Measurer<'_>,
+    side_by_side: bool,
     measuring: &mut dyn FnMut(usize, usize),
 ) -> Result<(Vec<LodLevel>, Vec<ErrorReport>), BuildError> {
     let diagonal = measurer.diagonal();
     let mut errors = Vec::with_capacity(splits.len());
     let mut lod_levels = Vec::with_capacity(splits.len());
+    let mut reports = Vec::new();
+    if side_by_side {
+        measuring(0, splits.len());
+        let levels: Vec<(&Mesh, usize)> = extracted
+            .iter()
+            .zip(splits)
+            .map(|(l, &k)| (l.mesh.as_ref().unwrap_or(full), k))
+            .collect();
+        reports = measurer.measure_levels(&levels, mopts)?;
+    }
+    let mut reports = reports.into_iter();
     for (li, (level, &k)) in extracted.into_iter().zip(splits).enumerate() {
-        measuring(li, splits.len());
-        let report = measurer.measure(level.mesh.as_ref().unwrap_or(full), k, mopts)?;
+        let report = match reports.next() {
+            Some(r) => r,
+            None => {
+                measuring(li, splits.len());
+                measurer.measure(level.mesh.as_ref().unwrap_or(full), k, mopts)?
+            }
+        };
         drop(level.mesh);
         lod_levels.push(LodLevel {
             primitives: level.primitives,

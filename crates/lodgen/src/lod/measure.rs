@@ -5,9 +5,14 @@
 //! The measurer does not hold the progressive mesh: the builder frees it
 //! once the levels are extracted, before the original's hierarchy is built
 //! (peak memory: at 4.4M triangles the two together were the run's peak).
+//! A small mesh's hierarchy may be built while the levels are extracted
+//! ([`Measurer::prepare`] on another thread), and its levels are measured
+//! side by side ([`Measurer::measure_levels`]): the measurer is `Sync`.
 
-use std::cell::{Cell, OnceCell};
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
 
 use lodgen_pm::metric::{Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::{Mesh, ProgressiveMesh};
@@ -27,9 +32,9 @@ pub(super) struct Measurer<'a> {
     measured: bool,
     diagonal: f64,
     /// The original's hierarchy and sample order, built at the first
-    /// measurement and used for every level.
-    reference: OnceCell<Reference<'a>>,
-    time: Cell<Duration>,
+    /// measurement (or by [`Self::prepare`]) and used for every level.
+    reference: OnceLock<Reference<'a>>,
+    time: Mutex<Duration>,
     index: usize,
     name: &'a str,
 }
@@ -57,8 +62,8 @@ impl<'a> Measurer<'a> {
             estimates,
             measured,
             diagonal: full.diagonal(),
-            reference: OnceCell::new(),
-            time: Cell::new(Duration::ZERO),
+            reference: OnceLock::new(),
+            time: Mutex::new(Duration::ZERO),
             index,
             name,
         }
@@ -73,8 +78,23 @@ impl<'a> Measurer<'a> {
         let full = self.full;
         let r = Reference::new(MeshRef::new(&full.positions, &full.triangles))
             .map_err(|e| measure_err(self.index, self.name, MeasureError::A(e)))?;
-        self.time.set(self.time.get() + t.elapsed());
+        self.add_time(t.elapsed());
         Ok(self.reference.get_or_init(|| r))
+    }
+
+    /// Builds the original's hierarchy now when the levels are measured
+    /// (nothing otherwise), so that it can be built beside other work.
+    pub(super) fn prepare(&self) -> Result<(), BuildError> {
+        if self.measured && self.splits > 0 {
+            self.reference()?;
+        }
+        Ok(())
+    }
+
+    fn add_time(&self, t: Duration) {
+        // (a poisoned lock only means another measurement panicked)
+        let mut time = self.time.lock().unwrap_or_else(|e| e.into_inner());
+        *time += t;
     }
 
     /// The original's bounding-box diagonal.
@@ -82,9 +102,10 @@ impl<'a> Measurer<'a> {
         self.diagonal
     }
 
-    /// Time spent measuring so far (the hierarchy included).
+    /// Time spent measuring so far (the hierarchy included; wall time, also
+    /// when it overlapped other work).
     pub(super) fn time(&self) -> Duration {
-        self.time.get()
+        *self.time.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Without measurement (`measured == false`), a level's error is the
@@ -138,7 +159,39 @@ impl<'a> Measurer<'a> {
         let r = reference
             .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
             .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)));
-        self.time.set(self.time.get() + t.elapsed());
+        self.add_time(t.elapsed());
+        r
+    }
+
+    /// The errors of `levels` (each a mesh and its split count, as for
+    /// [`Self::measure`]), measured side by side: one level's sequential
+    /// steps (its Z-order, its hierarchy's build) overlap another's queries.
+    /// Each report is the one [`Self::measure`] gives, bit for bit.
+    pub(super) fn measure_levels(
+        &self,
+        levels: &[(&Mesh, usize)],
+        mopts: &MeasureOptions,
+    ) -> Result<Vec<ErrorReport>, BuildError> {
+        if !self.measured || levels.iter().all(|&(_, k)| k >= self.splits) {
+            return levels
+                .iter()
+                .map(|&(m, k)| self.measure(m, k, mopts))
+                .collect();
+        }
+        let reference = self.reference()?;
+        let t = Instant::now();
+        let r = levels
+            .par_iter()
+            .map(|&(m, k)| {
+                if k >= self.splits {
+                    return Ok(self.exact_zero());
+                }
+                reference
+                    .measure(MeshRef::new(&m.positions, &m.triangles), mopts)
+                    .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)))
+            })
+            .collect();
+        self.add_time(t.elapsed());
         r
     }
 
@@ -159,5 +212,40 @@ fn measure_err(index: usize, name: &str, source: MeasureError) -> BuildError {
         index,
         name: name.to_string(),
         source,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The side-by-side measurement gives each level the report measuring it
+    /// alone gives, bit for bit, in the levels' order (fails if the reports
+    /// are paired with the wrong level, e.g. collected out of order, or if a
+    /// level that is the original is measured instead of given 0).
+    #[test]
+    fn levels_measured_side_by_side_match_one_by_one() {
+        let m = lodgen_pm::shapes::grid(24, 24, |x, y| 0.1 * (7.0 * x).sin() * (5.0 * y).cos());
+        let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        let opts = lodgen_pm::SimplifyOptions::DEFAULT.with_target_ratio(0.05);
+        let pm = lodgen_pm::simplify(&m.positions, &indices, &opts)
+            .unwrap()
+            .pm;
+        let full = pm.mesh_at_splits(pm.len());
+        let measurer = Measurer::new(&pm, &full, true, 0, "grid");
+        let splits = [pm.len(), pm.len() / 2, pm.len() / 8, 0];
+        let meshes: Vec<Mesh> = splits.iter().map(|&k| pm.mesh_at_splits(k)).collect();
+        let levels: Vec<(&Mesh, usize)> = meshes.iter().zip(splits).collect();
+        let mopts = MeasureOptions::DEFAULT;
+        let together = measurer.measure_levels(&levels, &mopts).unwrap();
+        let alone: Vec<ErrorReport> = levels
+            .iter()
+            .map(|&(m, k)| measurer.measure(m, k, &mopts).unwrap())
+            .collect();
+        assert_eq!(together, alone);
+        assert_eq!(together[0].hausdorff(), 0.0);
+        // the levels differ, so a mix-up shows
+        assert!(together[1].hausdorff() < together[2].hausdorff());
+        assert!(together[2].hausdorff() < together[3].hausdorff());
     }
 }
