@@ -15,7 +15,8 @@
 //!   samples are taken along the same curve); the build is one pass over the sorted codes
 //!   and one over the nodes, ~10× cheaper than the binned surface-area heuristic it replaced
 //!   (I. Wald, IEEE RT 2007) for queries of about the same cost (measured in
-//!   docs/performance.md).
+//!   docs/performance.md). `build.rs` collapses the binary tree a chunk at a time, so the
+//!   whole of it (≈ 41 bytes a triangle) never lives beside the 4-wide nodes.
 //! - Query: depth-first branch and bound, nearer children first, a subtree skipped when its box
 //!   is no closer than the best triangle found so far. The four box distances of a node are
 //!   computed side by side in `f32` (one SIMD lane each); they are only used to *skip* boxes,
@@ -26,14 +27,16 @@
 //! Bounds are stored as `f32`; since the input positions are `f32`, the min/max of a set of them
 //! is exact, so the boxes are tight and conservative. Triangle distances are `f64`.
 
+mod build;
+mod node;
+
+use build::{leaf_order_indices, wide_tree};
+use node::{max32, Node, EMPTY, NO_NODE};
+
 use super::triangle::widen;
 pub use super::triangle::{closest_point_on_triangle, distance_squared};
 use super::zorder::{self, ZOrder};
 use super::{MeshError, MeshRef};
-
-/// Triangles per leaf at most. Each child of a node has its own box, so small leaves mean a
-/// box test (4 lanes at once) before most triangle tests.
-const MAX_LEAF: usize = 2;
 
 /// The binary tree's depth at most: every Morton split lowers the highest differing bit of
 /// a 63-bit code, then ranges of equal codes halve (< 2³² triangles): 63 + 32 splits below
@@ -44,42 +47,6 @@ const MAX_DEPTH: usize = 96;
 
 /// Traversal stack size; see [`MAX_DEPTH`].
 const STACK: usize = 3 * MAX_DEPTH + 1;
-
-/// `count` of a child that does not exist.
-const EMPTY: u8 = u8::MAX;
-
-const _: () = assert!(std::mem::size_of::<Node>() == 128);
-
-/// The root's parent, and the node of a hint when the root is a leaf.
-const NO_NODE: u32 = u32::MAX;
-
-/// A node of the binary tree during the build: an axis-aligned box and either two children
-/// (`count == 0`, children at `first` and `first + 1`) or a leaf (`count > 0`, triangle slots
-/// `first..first + count`).
-#[derive(Clone, Copy, Debug)]
-struct BuildNode {
-    min: [f32; 3],
-    max: [f32; 3],
-    first: u32,
-    count: u32,
-}
-
-/// An internal node as queried: the boxes of its (up to) four children, structure of arrays
-/// (`lo[axis][child]`), so the four box distances are one SIMD computation. Child `c` is a leaf
-/// with slots `first[c]..first[c] + count[c]` when `0 < count[c] < EMPTY`, the internal node
-/// `first[c]` when `count[c] == 0`, and absent when `count[c] == EMPTY` (its box is empty:
-/// `lo = +∞`, `hi = −∞`, so its distance is infinite).
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-struct Node {
-    lo: [[f32; 4]; 3],
-    hi: [[f32; 4]; 3],
-    first: [u32; 4],
-    count: [u8; 4],
-    /// The node this one is a child of ([`NO_NODE`] for the root), for searches upwards from a
-    /// hint (in what would be padding: the node stays 128 bytes).
-    parent: u32,
-}
 
 /// A bounding-volume hierarchy over the triangles of one mesh, for exact closest-point queries.
 ///
@@ -180,69 +147,6 @@ fn skip_bound(best: f64, slack: f64) -> f32 {
     }
 }
 
-/// `f32::min` without its NaN handling (positions are validated finite): one instruction.
-#[inline(always)]
-fn min32(a: f32, b: f32) -> f32 {
-    if b < a {
-        b
-    } else {
-        a
-    }
-}
-
-#[inline(always)]
-fn max32(a: f32, b: f32) -> f32 {
-    if b > a {
-        b
-    } else {
-        a
-    }
-}
-
-/// Running bounds of a set of triangles or centroids.
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    min: [f32; 3],
-    max: [f32; 3],
-}
-
-impl Aabb {
-    const EMPTY: Aabb = Aabb {
-        min: [f32::INFINITY; 3],
-        max: [f32::NEG_INFINITY; 3],
-    };
-
-    #[inline]
-    fn grow(&mut self, other: &Aabb) {
-        for k in 0..3 {
-            self.min[k] = min32(self.min[k], other.min[k]);
-            self.max[k] = max32(self.max[k], other.max[k]);
-        }
-    }
-
-    #[inline]
-    fn grow_point(&mut self, p: [f32; 3]) {
-        for (k, &pk) in p.iter().enumerate() {
-            self.min[k] = min32(self.min[k], pk);
-            self.max[k] = max32(self.max[k], pk);
-        }
-    }
-
-    /// Half the surface area (the SAH only compares areas), in f64 to avoid f32 overflow.
-    #[inline]
-    fn half_area(&self) -> f64 {
-        if self.min[0] > self.max[0] {
-            return 0.0;
-        }
-        let d = [
-            f64::from(self.max[0]) - f64::from(self.min[0]),
-            f64::from(self.max[1]) - f64::from(self.min[1]),
-            f64::from(self.max[2]) - f64::from(self.min[2]),
-        ];
-        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
-    }
-}
-
 impl TriangleBvh {
     /// Builds the hierarchy over the triangles of `mesh`.
     ///
@@ -273,21 +177,14 @@ impl TriangleBvh {
         );
         let corners =
             |slot: usize| mesh.triangles[z.ids[slot] as usize].map(|v| mesh.positions[v as usize]);
-        // (the binary tree is collapsed and freed before the corners are copied into leaf
-        // order: peak ≈ 65 instead of 100 bytes per triangle)
-        let (nodes, depth) = morton_tree(&z.codes, corners);
-        // (the codes are not read again: freed before the collapse's peak)
+        // (the 4-wide tree directly, a chunk of the binary tree at a time: the whole binary
+        // tree, 41 bytes a triangle, beside the 4-wide nodes was the measurement's peak)
+        let wide = wide_tree(&z.codes, corners);
+        // (the codes are not read again: freed before the leaves are copied)
         let ZOrder { ids, codes } = z;
         drop(codes);
-        let root = nodes.first().copied();
-        let query_nodes = if nodes.is_empty() {
-            Vec::new()
-        } else {
-            collapse(&nodes)
-        };
-        drop(nodes);
         let (tris, points) = leaf_order_indices(mesh, &ids);
-        let Some(root) = root else {
+        let Some(root) = wide.root else {
             return TriangleBvh {
                 magnitude: 0.0,
                 root_first: 0,
@@ -307,8 +204,8 @@ impl TriangleBvh {
                 .fold(0.0, |m, &x| max64(m, f64::from(x).abs())),
             root_first: if root.count > 0 { root.first } else { 0 },
             root_count: root.count,
-            nodes: query_nodes,
-            depth,
+            nodes: wide.nodes,
+            depth: wide.depth,
             tris,
             points,
             ids,
@@ -339,7 +236,8 @@ impl TriangleBvh {
 
     /// Bytes held by the hierarchy (nodes, triangles, positions, ids).
     pub fn heap_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node>()
+        // (the nodes' unused capacity is never written: not resident)
+        self.nodes.len() * std::mem::size_of::<Node>()
             + self.tris.capacity() * std::mem::size_of::<[u32; 3]>()
             + self.points.capacity() * std::mem::size_of::<[f32; 3]>()
             + self.ids.capacity() * std::mem::size_of::<u32>()
@@ -599,171 +497,4 @@ impl Query {
             stop,
         }
     }
-}
-
-/// The triangles of the validated `mesh` in the order `ids`, as indices into the positions they
-/// use, those numbered by first use along that order; and the positions. (A map of the mesh's
-/// vertex count lives while this runs.)
-fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3]>, Vec<[f32; 3]>) {
-    let mut number = vec![u32::MAX; mesh.positions.len()];
-    let mut points: Vec<[f32; 3]> = Vec::new();
-    let tris = ids
-        .iter()
-        .map(|&t| {
-            mesh.triangles[t as usize].map(|v| {
-                let n = &mut number[v as usize];
-                if *n == u32::MAX {
-                    // (at most 3 × u32::MAX triangles' corners, but the numbers are of
-                    // distinct vertices of `positions`, whose indices are u32)
-                    *n = points.len() as u32;
-                    points.push(mesh.positions[v as usize]);
-                }
-                *n
-            })
-        })
-        .collect();
-    points.shrink_to_fit();
-    (tris, points)
-}
-
-/// Collapses the binary build tree into 4-wide query nodes, depth first: each node takes its
-/// two children and keeps opening the internal one of largest area until it has four.
-fn collapse(build: &[BuildNode]) -> Vec<Node> {
-    if build[0].count > 0 {
-        return Vec::new(); // the root is a leaf
-    }
-    let blank = Node {
-        lo: [[f32::INFINITY; 4]; 3],
-        hi: [[f32::NEG_INFINITY; 4]; 3],
-        first: [0; 4],
-        count: [EMPTY; 4],
-        parent: NO_NODE,
-    };
-    let mut nodes: Vec<Node> = Vec::with_capacity(build.len() / 3 + 1);
-    nodes.push(blank);
-    // (build index of an internal node, its query index, its parent's)
-    let mut work: Vec<(usize, usize, u32)> = vec![(0, 0, NO_NODE)];
-    let area = |i: usize| {
-        let b = &build[i];
-        Aabb {
-            min: b.min,
-            max: b.max,
-        }
-        .half_area()
-    };
-    while let Some((bi, ni, parent)) = work.pop() {
-        debug_assert_eq!(build[bi].count, 0);
-        let l = build[bi].first as usize;
-        let mut kids = [l, l + 1, 0, 0];
-        let mut n = 2;
-        while n < 4 {
-            let open = (0..n)
-                .filter(|&i| build[kids[i]].count == 0)
-                .max_by(|&i, &j| area(kids[i]).total_cmp(&area(kids[j])).then(j.cmp(&i)));
-            let Some(i) = open else { break };
-            let f = build[kids[i]].first as usize;
-            kids.copy_within(i + 1..n, i + 2);
-            kids[i] = f;
-            kids[i + 1] = f + 1;
-            n += 1;
-        }
-        let mut node = Node { parent, ..blank };
-        for (c, &k) in kids[..n].iter().enumerate() {
-            let b = &build[k];
-            for a in 0..3 {
-                node.lo[a][c] = b.min[a];
-                node.hi[a][c] = b.max[a];
-            }
-            if b.count > 0 {
-                node.first[c] = b.first;
-                node.count[c] = b.count as u8;
-            } else {
-                let new = nodes.len();
-                nodes.push(blank); // placeholder, written when popped
-                node.first[c] = new as u32;
-                node.count[c] = 0;
-                work.push((k, new, ni as u32));
-            }
-        }
-        nodes[ni] = node;
-    }
-    nodes.shrink_to_fit();
-    nodes
-}
-
-/// The binary tree over the triangles whose Morton codes are `codes` (sorted) and corners
-/// `corners(slot)`: each node's range of slots split where the highest Morton bit differing in
-/// it flips (halved when all codes are equal), down to at most [`MAX_LEAF`] slots. Nodes in
-/// depth-first order, children after their parent; and the number of levels.
-///
-/// (Leaves of exactly two consecutive slots instead, 10 % fewer nodes, made 1.5× more box and
-/// 1.8× more triangle tests: a pair across a jump of the curve has a loose box.)
-fn morton_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3]) -> (Vec<BuildNode>, usize) {
-    let n = codes.len();
-    if n == 0 {
-        return (Vec::new(), 0);
-    }
-    let blank = BuildNode {
-        min: [0.0; 3],
-        max: [0.0; 3],
-        first: 0,
-        count: 0,
-    };
-    let mut nodes: Vec<BuildNode> = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF));
-    nodes.push(blank);
-    let mut max_depth = 0;
-    // Work list of (node index, first slot, slot count, depth); explicit, so a badly
-    // unbalanced input cannot overflow the call stack.
-    let mut work: Vec<(usize, usize, usize, usize)> = vec![(0, 0, n, 0)];
-    while let Some((ni, first, count, depth)) = work.pop() {
-        max_depth = max_depth.max(depth + 1);
-        if count <= MAX_LEAF {
-            let mut b = Aabb::EMPTY;
-            for slot in first..first + count {
-                corners(slot).iter().for_each(|&p| b.grow_point(p));
-            }
-            nodes[ni] = BuildNode {
-                min: b.min,
-                max: b.max,
-                first: first as u32,
-                count: count as u32,
-            };
-            continue;
-        }
-        let range = &codes[first..first + count];
-        let differ = range[0] ^ range[count - 1];
-        // Codes share every bit above the highest differing one, so the first code with that
-        // bit set is a partition point; each split lowers that bit, then equal codes halve.
-        let mid = if differ == 0 {
-            count / 2
-        } else {
-            let bit = 1u64 << (63 - differ.leading_zeros());
-            range.partition_point(|&c| c & bit == 0)
-        };
-        debug_assert!(0 < mid && mid < count);
-        let left = nodes.len();
-        nodes[ni].first = left as u32;
-        nodes[ni].count = 0;
-        nodes.push(blank);
-        nodes.push(blank);
-        work.push((left + 1, first + mid, count - mid, depth + 1));
-        work.push((left, first, mid, depth + 1));
-    }
-    // Children come after their parent: boxes bottom-up in one backward pass.
-    for i in (0..nodes.len()).rev() {
-        if nodes[i].count == 0 {
-            let l = nodes[i].first as usize;
-            let mut b = Aabb {
-                min: nodes[l].min,
-                max: nodes[l].max,
-            };
-            b.grow(&Aabb {
-                min: nodes[l + 1].min,
-                max: nodes[l + 1].max,
-            });
-            nodes[i].min = b.min;
-            nodes[i].max = b.max;
-        }
-    }
-    (nodes, max_depth)
 }
