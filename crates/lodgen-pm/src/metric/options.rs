@@ -37,8 +37,9 @@ pub enum Method {
 ///   local maximum (at most 96 points each).
 ///
 /// Every point is measured exactly. Measured against 64 area samples per triangle and the
-/// certified maximum of [`MeasureOptions::BOUNDED`] (README, "Measured error"): on the bunny's
-/// 50 / 10 / 2 % levels the mean and RMS are within 0.75 % of the dense figures, and each
+/// certified maximum of [`MeasureOptions::BOUNDED`]: over 8 seeds, the mean and RMS of the
+/// 50 / 10 / 2 % levels of bunny, cow and fandisk scatter 0.2–0.9 % (one standard deviation)
+/// around the dense figures, the farthest 1.8 % off (docs/performance.md, eighth round), and each
 /// one-sided maximum is at least METRO's (the 10 % level's back direction 6.16 instead of 4.12
 /// ×10⁻⁴, the certified maximum 6.15–6.24), for 0.4× of METRO's CPU time.
 ///
