@@ -7,7 +7,8 @@
 use lodgen_pm::shapes::{grid, icosphere, torus};
 use lodgen_pm::simplify::FLIP_MIN_COS;
 use lodgen_pm::{
-    prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, Tau,
+    prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, StopReason,
+    Tau,
 };
 use proptest::prelude::*;
 
@@ -466,5 +467,53 @@ fn beetle_contracts_along_its_edges_of_three_faces_and_replays_exactly() {
         assert_eq!(out.pm.full_in_input_order(), m);
         let (a, b) = run_and_step(&m, &opts, None);
         assert_eq!(a, b);
+    }
+}
+
+/// [`SimplifyOptions::allow_topology_change`] on a mesh whose topology
+/// stops it: the run reaches its target (without the option it stops
+/// above it, `Exhausted`), the contractions the option allowed are
+/// counted, replay gives the input back, every level is the simplifier's
+/// own state (the log's levels against its snapshots) and `run` equals
+/// stepping. Fails if the option relaxes nothing (the stop stays
+/// `Exhausted`) or a relaxed contraction is logged inexactly.
+fn check_topology_change(m: &Mesh, target: usize, greedy: bool) {
+    let strict = SimplifyOptions::DEFAULT
+        .with_target_triangles(target)
+        .with_schedule(schedule(greedy));
+    let out = simplify(&m.positions, &m.indices(), &strict).unwrap();
+    assert_eq!(out.stop, StopReason::Exhausted, "greedy {greedy}");
+    assert!(out.pm.base.triangles.len() > target);
+    let opts = strict.with_allow_topology_change(true);
+    let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
+    assert_eq!(out.stop, StopReason::Target, "greedy {greedy}");
+    let base = out.pm.base.triangles.len();
+    assert!(
+        base <= target && base > 0,
+        "{base} triangles, greedy {greedy}"
+    );
+    assert!(out.stats.relaxed.total() > 0);
+    assert_eq!(out.pm.full_in_input_order(), *m);
+    check_snapshots(m, &opts).unwrap();
+    let (a, b) = run_and_step(m, &opts, None);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn allow_topology_change_reaches_the_target_where_the_topology_stopped_the_run() {
+    // a closed sphere stops at a tetrahedron (4 faces: every contraction
+    // would flatten it); relaxed, it flattens into two faces
+    let s = icosphere(1);
+    let sphere = prepare(&s.positions, &s.indices()).unwrap().mesh;
+    for greedy in [false, true] {
+        check_topology_change(&sphere, 2, greedy);
+    }
+    // beetle.obj stops at 96 of its 2 % (41): panels on edges of three
+    // faces, border loops pinching
+    let Some(m) = common::shared_mesh("beetle.obj") else {
+        return;
+    };
+    for greedy in [false, true] {
+        check_topology_change(&m, 41, greedy);
     }
 }

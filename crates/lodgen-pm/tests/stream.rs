@@ -738,3 +738,24 @@ fn splits_restoring_three_or_four_faces_round_trip() {
         assert_round_trip(&pm, EncodeOptions::DEFAULT);
     }
 }
+
+/// Splits of contractions `SimplifyOptions::allow_topology_change` let
+/// through (a closed sphere flattened into two coinciding faces, beetle's
+/// panels joined across its border loops) code and decode exactly like any
+/// other: fails if the stream assumed a manifold ring around each split.
+#[test]
+fn topology_changing_splits_round_trip() {
+    let opts = |target| {
+        SimplifyOptions::DEFAULT
+            .with_target_triangles(target)
+            .with_allow_topology_change(true)
+    };
+    let pm = pm_of(&icosphere(1), opts(2));
+    assert_eq!(pm.base.triangles.len(), 2);
+    assert_round_trip(&pm, EncodeOptions::DEFAULT);
+    if let Some(m) = common::shared_mesh("beetle.obj") {
+        let out = simplify(&m.positions, &m.indices(), &opts(41)).unwrap();
+        assert!(out.stats.relaxed.total() > 0);
+        assert_round_trip(&out.pm, EncodeOptions::DEFAULT);
+    }
+}

@@ -17,8 +17,12 @@ impl Simplifier {
             p,
             error,
             removed,
+            broke,
             ..
         } = plan;
+        if let Some(r) = broke {
+            self.stats.relaxed.count(r);
+        }
         let (i0, i1) = (v0 as usize, v1 as usize);
         let merged = fv(p);
         let edits = self.features.as_ref().map(|f| {

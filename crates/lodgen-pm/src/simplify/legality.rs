@@ -47,6 +47,51 @@ pub enum Rejected {
     Feature,
 }
 
+/// How far [`crate::SimplifyOptions::allow_topology_change`] has relaxed
+/// the rules of a run that found no legal contraction: each stage lets one
+/// more kind of refusal pass, and those of the stages before it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Relax {
+    /// Every rule holds.
+    #[default]
+    None,
+    /// Non-manifold joins: [`Rejected::Link`], [`Rejected::BoundaryPinch`].
+    Joins,
+    /// Closed parts flattened into sheets: [`Rejected::Duplicate`].
+    Sheets,
+    /// Feature vertices off their lines: [`Rejected::Feature`].
+    Features,
+    /// Faces turned over or collapsed: [`Rejected::Flip`],
+    /// [`Rejected::Degenerate`].
+    Flips,
+}
+
+impl Relax {
+    /// The stage after this one (`None` after the last).
+    pub fn next(self) -> Option<Relax> {
+        match self {
+            Relax::None => Some(Relax::Joins),
+            Relax::Joins => Some(Relax::Sheets),
+            Relax::Sheets => Some(Relax::Features),
+            Relax::Features => Some(Relax::Flips),
+            Relax::Flips => None,
+        }
+    }
+
+    /// Whether a contraction refused for `r` may go on at this stage
+    /// (never for [`Rejected::Locked`] or [`Rejected::Error`]: the user's
+    /// locked border and error bound hold).
+    pub fn allows(self, r: Rejected) -> bool {
+        self >= match r {
+            Rejected::Link | Rejected::BoundaryPinch => Relax::Joins,
+            Rejected::Duplicate => Relax::Sheets,
+            Rejected::Feature => Relax::Features,
+            Rejected::Flip | Rejected::Degenerate => Relax::Flips,
+            Rejected::Locked | Rejected::Error => return false,
+        }
+    }
+}
+
 /// The mesh state the legality tests read (shared by `Simplifier` and the
 /// curvature-adaptive sweeps).
 pub(crate) struct Faces<'a, F: FanLookup + ?Sized> {
@@ -227,6 +272,25 @@ pub(crate) fn fuses_odd_edges<F: FanLookup + ?Sized>(
     opposite
         .iter()
         .any(|&o| faces_on(v0, o) >= 3 && faces_on(v1, o) >= 3)
+}
+
+/// Whether a face of `v0` that does not hold `v1` would land on a face of
+/// `v1` once `v0` is contracted into `v1`: a face `v0 x y` beside a
+/// `v1 x y`, for any `x` and `y` (the general duplicate test, for a
+/// contraction the link condition does not hold for; with it,
+/// `moved_faces_ok` tests the opposite vertices only).
+pub(crate) fn lands_on_any<F: FanLookup + ?Sized>(f: Faces<'_, F>, v0: u32, v1: u32) -> bool {
+    let live = |v: u32| {
+        f.vtris.fan(v).iter().filter_map(move |&t| {
+            let tri = f.tris[t as usize];
+            (f.alive[t as usize] && tri.contains(&v)).then_some(tri)
+        })
+    };
+    live(v0).filter(|tri| !tri.contains(&v1)).any(|tri| {
+        let mut o = tri.iter().copied().filter(|&x| x != v0);
+        let (x, y) = (o.next(), o.next());
+        live(v1).any(|u| x.is_some_and(|x| u.contains(&x)) && y.is_some_and(|y| u.contains(&y)))
+    })
 }
 
 /// Whether `v` has an open border edge (one live face) in its fan.

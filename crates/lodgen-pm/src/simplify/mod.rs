@@ -167,6 +167,9 @@ struct Plan {
     deferred: bool,
     /// [`Simplifier::hole_cost`] of the contraction (0: it closes no hole).
     hole: f64,
+    /// The rule the contraction breaks, which the relaxation stage lets
+    /// pass ([`SimplifyOptions::allow_topology_change`]; `None`: none).
+    broke: Option<Rejected>,
 }
 
 /// A candidate of a pass: 12 bytes (the pass list and its sort buffer are
@@ -207,6 +210,10 @@ struct Pass {
     spread_limit: f64,
     /// Candidates skipped by `spread_limit` in this pass.
     deferred: usize,
+    /// The rules this pass relaxes ([`SimplifyOptions::allow_topology_change`]:
+    /// raised a stage each time the run is stuck; back to none after a
+    /// pass that made a contraction).
+    relax: legality::Relax,
 }
 
 #[inline]

@@ -130,6 +130,24 @@ pub struct SimplifyOptions {
     /// simplification CPU on the bunny (the reach test of every planned
     /// pair; docs/performance.md), and raises three cells (docs/quality.md).
     pub reach: Option<f64>,
+    /// When no contraction that keeps the topology is left before the
+    /// target, go on with the refused kinds allowed, one kind more each
+    /// time the run is stuck again, in this order: joins that make the
+    /// surface non-manifold (the link condition, two borders pinched
+    /// together, two edges of three faces fused), closed parts flattened
+    /// into double-sided sheets (duplicate faces, which a later
+    /// contraction can take away), then feature vertices (seams, hard
+    /// edges, material borders) leaving their lines, then faces turning
+    /// over or collapsing to slivers. Each stage runs in cost order; with
+    /// [`Schedule::Passes`] a pass that made any contraction is followed
+    /// by one with every rule back. Every contraction is still a vertex
+    /// split of the log (replay stays exact); `Stats::relaxed` counts them
+    /// by the rule they broke. Locked vertices ([`Boundary::Locked`])
+    /// stay locked and `max_error` still binds. Default value: `false`:
+    /// a mesh whose topology holds the triangles (beetle.obj: edges of
+    /// three faces, 23 border loops) stops above its target
+    /// ([`crate::StopReason::Exhausted`]).
+    pub allow_topology_change: bool,
 }
 
 impl SimplifyOptions {
@@ -147,6 +165,7 @@ impl SimplifyOptions {
         },
         partition: Some(DEFAULT_CLUSTER_TRIANGLES),
         reach: None,
+        allow_topology_change: false,
     };
     /// Stop at `n` triangles.
     pub fn with_target_triangles(mut self, n: usize) -> Self {
@@ -199,6 +218,13 @@ impl SimplifyOptions {
     /// pass's spread bound (`None`: never).
     pub fn with_reach(mut self, f: Option<f64>) -> Self {
         self.reach = f;
+        self
+    }
+
+    /// When stuck before the target, go on with topology-changing
+    /// contractions ([`SimplifyOptions::allow_topology_change`]).
+    pub fn with_allow_topology_change(mut self, on: bool) -> Self {
+        self.allow_topology_change = on;
         self
     }
 

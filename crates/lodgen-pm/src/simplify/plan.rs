@@ -3,7 +3,7 @@
 //! contraction is legal ([`super::legality`]). Reads nothing outside the
 //! closed one-rings of the pair (what the batched walk relies on).
 
-use super::legality::{fuses_odd_edges, link, moved_faces_ok, Faces};
+use super::legality::{fuses_odd_edges, lands_on_any, link, moved_faces_ok, Faces};
 use super::reach::REACH_GATE;
 use super::{dv, Plan, Rejected, Simplifier};
 use crate::mesh::adjacency::FanLookup;
@@ -42,7 +42,7 @@ impl Simplifier {
         } else {
             (a, b)
         };
-        let removed = self.check(v0, v1, p)?;
+        let (removed, broke) = self.check(v0, v1, p)?;
         // (finite and positive only in a pass with the spread bound)
         let limit = self
             .opts
@@ -65,18 +65,39 @@ impl Simplifier {
             removed,
             deferred,
             hole,
+            broke,
         })
     }
 
     /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
-    /// On success returns the triangles the contraction deletes.
-    pub(super) fn check(&self, v0: u32, v1: u32, p: DVec3) -> Result<SmallVec<[u32; 2]>, Rejected> {
+    /// On success returns the triangles the contraction deletes, and the
+    /// first rule it breaks that the run's relaxation stage (`Pass::relax`,
+    /// [`crate::SimplifyOptions::allow_topology_change`]) lets pass.
+    pub(super) fn check(
+        &self,
+        v0: u32,
+        v1: u32,
+        p: DVec3,
+    ) -> Result<(SmallVec<[u32; 2]>, Option<Rejected>), Rejected> {
         let (i0, i1) = (v0 as usize, v1 as usize);
         if self.locked[i0] && self.locked[i1] {
             return Err(Rejected::Locked);
         }
+        let relax = self.pass.relax;
+        let mut broke = None;
+        // a refusal the stage lets pass: the first is recorded
+        let mut refuse = |r: Rejected| {
+            if relax.allows(r) {
+                broke.get_or_insert(r);
+                Ok(())
+            } else {
+                Err(r)
+            }
+        };
         if let Some(f) = &self.features {
-            f.allows(v0, v1)?;
+            if let Err(r) = f.allows(v0, v1) {
+                refuse(r)?;
+            }
         }
         let faces = Faces {
             tris: &self.tris,
@@ -89,20 +110,32 @@ impl Simplifier {
         // more sheets meet) is no border edge: with both ends on a border
         // the contraction would pinch
         if l.shared.len() >= 2 && self.boundary[i0] && self.boundary[i1] {
-            return Err(Rejected::BoundaryPinch);
+            refuse(Rejected::BoundaryPinch)?;
         }
         // (a vertex on an edge of three or more faces is a corner, and so
         // is whatever it is contracted into: only corner pairs can fuse)
-        if !l.holds()
+        let joined = !l.holds()
             || (!l.shared.is_empty()
                 && self.corner[i0]
                 && self.corner[i1]
-                && fuses_odd_edges(faces, v0, v1, &l.opposite))
-        {
-            return Err(Rejected::Link);
+                && fuses_odd_edges(faces, v0, v1, &l.opposite));
+        if joined {
+            refuse(Rejected::Link)?;
         }
-        moved_faces_ok(faces, v0, v1, p, &l.opposite)?;
-        Ok(l.shared)
+        if let Err(r) = moved_faces_ok(faces, v0, v1, p, &l.opposite) {
+            refuse(r)?;
+        }
+        // a join lets any face land on another, not only the opposite
+        // vertices' (which `moved_faces_ok` tests)
+        if joined && lands_on_any(faces, v0, v1) {
+            refuse(Rejected::Duplicate)?;
+        }
+        // (a flattened part's last two faces are on one edge: relaxed, the
+        // mesh keeps at least one face)
+        if let Some(r) = broke.filter(|_| l.shared.len() >= self.live_tris) {
+            return Err(r);
+        }
+        Ok((l.shared, broke))
     }
 
     /// Prefetch what planning the pair `(a, b)` reads first about its

@@ -3,6 +3,7 @@
 //! pair, costed in parallel (a lane batch at a time), bucketed by cost and
 //! sorted as far as the walk gets, each pass stopping at a cost limit.
 
+use super::legality::Relax;
 use super::{dv, Entry, Pass, PassEntry, Rejected, Simplifier, StopReason};
 use crate::mesh::adjacency::FanLookup;
 use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
@@ -82,25 +83,67 @@ impl Simplifier {
     }
 
     pub(super) fn step_greedy(&mut self) -> Result<(), StopReason> {
-        while let Some(e) = self.heap.pop() {
-            let (a, b) = (e.a as usize, e.b as usize);
-            if !self.alive[a]
-                || !self.alive[b]
-                || self.version[a] != e.va
-                || self.version[b] != e.vb
-            {
-                continue;
+        loop {
+            while let Some(e) = self.heap.pop() {
+                let (a, b) = (e.a as usize, e.b as usize);
+                if !self.alive[a]
+                    || !self.alive[b]
+                    || self.version[a] != e.va
+                    || self.version[b] != e.vb
+                {
+                    continue;
+                }
+                match self.try_contract(e.a, e.b) {
+                    Ok(()) => return Ok(()),
+                    Err(r) => self.stats.rejected.count(r),
+                }
             }
-            match self.try_contract(e.a, e.b) {
-                Ok(()) => return Ok(()),
-                Err(r) => self.stats.rejected.count(r),
+            // stuck: every pair again, with the rules relaxed a stage
+            // further (a greedy run keeps the stage from here on)
+            match self.pass.relax.next() {
+                Some(r) if self.opts.allow_topology_change => {
+                    self.pass.relax = r;
+                    self.fill_heap(self.live_pairs(), &[]);
+                }
+                _ => {
+                    return Err(if self.stats.rejected.error > 0 {
+                        StopReason::MaxError
+                    } else {
+                        StopReason::Exhausted
+                    })
+                }
             }
         }
-        Err(if self.stats.rejected.error > 0 {
-            StopReason::MaxError
-        } else {
-            StopReason::Exhausted
-        })
+    }
+
+    /// Every live pair: the edges of the live triangles and the live τ
+    /// partners, each once as `(a, b)`, `a < b`, sorted.
+    fn live_pairs(&self) -> Vec<(u32, u32)> {
+        let mut pairs = Vec::new();
+        for v in 0..self.pos.len() as u32 {
+            if !self.alive[v as usize] {
+                continue;
+            }
+            for &t in self.vtris.fan(v) {
+                if self.tri_alive[t as usize] && self.tris[t as usize].contains(&v) {
+                    pairs.extend(
+                        self.tris[t as usize]
+                            .iter()
+                            .filter(|&&x| x > v)
+                            .map(|&x| (v, x)),
+                    );
+                }
+            }
+            pairs.extend(
+                self.partners(v)
+                    .iter()
+                    .filter(|&&x| x > v && self.alive[x as usize])
+                    .map(|&x| (v, x)),
+            );
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        pairs
     }
 
     pub(super) fn step_pass(&mut self, factor: f32) -> Result<(), StopReason> {
@@ -108,13 +151,23 @@ impl Simplifier {
             let pass = &mut self.pass;
             if pass.cursor >= pass.queue.len() {
                 let stuck = pass.open && pass.collapses == 0;
+                // (after a pass that made a contraction, every rule is back)
+                if !stuck {
+                    pass.relax = Relax::None;
+                }
                 if stuck && pass.deferred == 0 {
-                    // nothing changed: the next pass would be the same
-                    return Err(if pass.error_rejections > 0 {
-                        StopReason::MaxError
-                    } else {
-                        StopReason::Exhausted
-                    });
+                    // nothing changed: the next pass would be the same,
+                    // unless the rules relax a stage further
+                    match pass.relax.next() {
+                        Some(r) if self.opts.allow_topology_change => pass.relax = r,
+                        _ => {
+                            return Err(if pass.error_rejections > 0 {
+                                StopReason::MaxError
+                            } else {
+                                StopReason::Exhausted
+                            })
+                        }
+                    }
                 }
                 // (a pass that contracted nothing but deferred pairs is
                 // followed by one without the spread bound)

@@ -93,6 +93,11 @@ pub struct Stats {
     pub locked_vertices: usize,
     /// Candidates refused, by reason.
     pub rejected: Rejections,
+    /// Contractions made only because
+    /// [`SimplifyOptions::allow_topology_change`](super::SimplifyOptions::allow_topology_change)
+    /// is on, by the rule each broke (the first the usual checks would
+    /// have refused it for).
+    pub relaxed: Rejections,
     /// Wall time per phase.
     pub time: PhaseTimes,
 }

@@ -102,6 +102,18 @@ pub struct BuildArgs {
     #[arg(long, value_name = "FACTOR", num_args = 0..=1, default_missing_value = "1.1")]
     pub reach: Option<f64>,
 
+    /// Reach every requested triangle count, at the price of the surface's
+    /// topology: when no contraction that keeps it is left (the table's
+    /// note says where a mesh stopped, and why), go on with the refused
+    /// kinds, one more each time the run is stuck again — joins that make
+    /// the surface non-manifold or pinch two borders together, closed parts
+    /// flattened into double-sided sheets, seams and hard edges leaving
+    /// their lines, faces turning over — cheapest first. Holes may merge,
+    /// panels fuse with the body, small closed parts flatten. Off by
+    /// default (docs/quality.md, "Reaching the count").
+    #[arg(long)]
+    pub allow_topology_change: bool,
+
     /// Simplification method: "qem" (Garland–Heckbert pair contraction),
     /// the curvature-adaptive operators of seed 001 — "edge" (full edge
     /// collapse to the midpoint), "half-edge", "triangle" (three vertices to
@@ -364,7 +376,8 @@ impl BuildArgs {
                 ScheduleMode::Passes => SimplifyOptions::DEFAULT.schedule,
                 ScheduleMode::Greedy => Schedule::Greedy,
             })
-            .with_reach(self.reach);
+            .with_reach(self.reach)
+            .with_allow_topology_change(self.allow_topology_change);
         let method: lodgen_pm::Method = self
             .method
             .parse()

@@ -113,8 +113,17 @@ pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> Strin
         lodgen_pm::StopReason::MaxError => "every remaining contraction exceeds the error bound",
         _ => "no legal contraction is left",
     };
+    // (the refusals the option relaxes: it can only help when they stopped the run)
+    let relaxable = r.link + r.boundary_pinch + r.duplicate + r.feature + r.flip + r.degenerate;
+    let hint = if stop != lodgen_pm::StopReason::Exhausted || relaxable == 0 {
+        ""
+    } else if stats.relaxed.total() > 0 {
+        "; --allow-topology-change went no further"
+    } else {
+        "; --allow-topology-change reaches it, at the price of the surface's topology"
+    };
     format!(
-        "simplification stopped at {} triangles, before the coarsest requested level: {head}{}; \
+        "simplification stopped at {} triangles, before the coarsest requested level: {head}{}{hint}; \
          coarser levels would repeat this one and are not written",
         stats.output_triangles,
         if reasons.is_empty() {
@@ -123,6 +132,32 @@ pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> Strin
             format!(" (of the candidates refused, {})", reasons.join(", "))
         }
     )
+}
+
+/// What `--allow-topology-change` did, in words (`None`: nothing).
+pub fn topology_note(stats: &lodgen_pm::Stats) -> Option<String> {
+    let r = &stats.relaxed;
+    if r.total() == 0 {
+        return None;
+    }
+    let kinds: Vec<String> = [
+        (r.link + r.boundary_pinch, "joined sheets or borders"),
+        (r.duplicate, "flattened a closed part"),
+        (
+            r.feature,
+            "moved a seam, hard edge or material border off its line",
+        ),
+        (r.flip + r.degenerate, "turned a face over or left a sliver"),
+    ]
+    .iter()
+    .filter(|k| k.0 > 0)
+    .map(|(n, w)| format!("{n} {w}"))
+    .collect();
+    Some(format!(
+        "--allow-topology-change: {} contractions changed the topology to reach the coarsest level ({})",
+        r.total(),
+        kinds.join(", ")
+    ))
 }
 
 /// The per-mesh table printed on stdout.
@@ -142,6 +177,9 @@ pub fn table(builds: &[MeshBuild], bytes: &[Vec<u64>]) -> String {
         );
         if st.stop != lodgen_pm::StopReason::Target {
             s += &format!("  note: {}\n", stop_note(st.stop, &st.stats));
+        }
+        if let Some(n) = topology_note(&st.stats) {
+            s += &format!("  note: {n}\n");
         }
         for n in &b.notes {
             s += &format!("  note: {n}\n");
@@ -186,6 +224,9 @@ fn report_json(
             "welded_triangles": b.simplified.stats.input_triangles,
             "measured": b.measured,
             "stop": format!("{:?}", b.simplified.stop),
+            "stop_note": (b.simplified.stop != lodgen_pm::StopReason::Target)
+                .then(|| stop_note(b.simplified.stop, &b.simplified.stats)),
+            "topology_changes": b.simplified.stats.relaxed.total(),
             "notes": b.notes,
             "levels": b.lod.levels.iter().zip(&b.errors).zip(&b.level_splits).enumerate().map(|(k, ((l, e), s))| json!({
                 "triangles": l.triangle_count(),
