@@ -431,16 +431,16 @@ impl Engine {
 
     pub(super) fn finish(mut self) -> (ProgressiveMesh, Stats, AdaptiveReport) {
         let t0 = Instant::now();
+        self.stats.collapses = self.log.records.len();
         let pm = ProgressiveMesh::from_log(
             &self.pos,
             &self.tris,
             &self.alive,
             &self.tri_alive,
-            &self.log,
+            &mut self.log,
             None,
             None,
         );
-        self.stats.collapses = self.log.records.len();
         self.stats.output_triangles = self.live_tris;
         self.stats.output_vertices = pm.base.positions.len();
         self.stats.rejected = self.report.prevented;

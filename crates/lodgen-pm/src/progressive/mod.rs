@@ -27,6 +27,7 @@
 
 pub mod attrfit;
 pub mod levels;
+mod log;
 mod split;
 #[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
@@ -34,6 +35,8 @@ mod wedgelog;
 
 pub use split::{Corner, CornerIter, Corners, VertexSplit};
 pub use wedgelog::{SplitWedges, WedgeLog};
+
+pub(crate) use log::{Contraction, Log};
 
 use crate::mesh::Mesh;
 use crate::util::prefetch;
@@ -56,194 +59,10 @@ pub struct ProgressiveMesh {
     pub wedges: Option<WedgeLog>,
 }
 
-/// A contraction as the simplifier records it, in the welded input's
-/// numbering (see `collapse`). Its moved corners are `log.moved(c)`.
-/// `v0`'s position and the merged one are not stored: a removed vertex
-/// keeps its last position in the simplifier's final state, and the merged
-/// position is `v1`'s position after the contraction, i.e. the `p1` of the
-/// next contraction into `v1`, or `v1`'s final position (`from_log`).
-#[derive(Clone, Debug)]
-pub(crate) struct Contraction {
-    pub v0: u32,
-    pub v1: u32,
-    /// `v1`'s position before the contraction.
-    pub p1: [f32; 3],
-    pub removed: Removed,
-    pub moved: std::ops::Range<u32>,
-    pub error: f32,
-}
-
-/// The triangles a contraction deletes: two for an interior edge, one on a
-/// border, none for a τ pair, inline (12 bytes, where a `SmallVec` took
-/// 32: the log holds one per contraction); `k ≥ 3` for an edge of `k`
-/// faces (rare: a chain of non-manifold edges), then `t[0]` is where they
-/// start in the log's [`Log::more_removed`]. Read them with
-/// [`Log::removed`].
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Removed {
-    t: [u32; 2],
-    n: u32,
-}
-
-impl Removed {
-    /// Number of triangles.
-    pub fn len(&self) -> usize {
-        self.n as usize
-    }
-}
-
-/// The simplifiers' contraction log: the records, and one arena for all
-/// their moved corners (and wedge edits), so that logging a contraction
-/// allocates nothing.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Log {
-    pub records: Vec<Contraction>,
-    /// Moved corners packed as `triangle << 2 | slot` (4 bytes, not 8:
-    /// meshes have fewer than 2^30 triangles, see `Mesh::validate`).
-    corners: Vec<u32>,
-    /// Parallel to `corners` when wedges are tracked: `[before, after]`
-    /// the contraction. Empty otherwise.
-    pub wedges: Vec<[u32; 2]>,
-    /// The deleted triangles of the contractions along edges of three or
-    /// more faces (see [`Removed`]).
-    more_removed: Vec<u32>,
-}
-
-impl Log {
-    pub fn with_capacity(contractions: usize) -> Log {
-        Log {
-            records: Vec::with_capacity(contractions),
-            corners: Vec::with_capacity(contractions * 9 / 2),
-            wedges: Vec::new(),
-            more_removed: Vec::new(),
-        }
-    }
-
-    /// `ts` as a record's [`Removed`] (three or more kept in this log).
-    pub fn removed_of(&mut self, ts: &[u32]) -> Removed {
-        let mut t = [u32::MAX; 2];
-        if ts.len() <= 2 {
-            t[..ts.len()].copy_from_slice(ts);
-        } else {
-            t[0] = self.more_removed.len() as u32;
-            self.more_removed.extend_from_slice(ts);
-        }
-        Removed {
-            t,
-            n: ts.len() as u32,
-        }
-    }
-
-    /// The triangles `c` deleted.
-    #[inline]
-    pub fn removed<'a>(&'a self, c: &'a Contraction) -> &'a [u32] {
-        let r = &c.removed;
-        match r.n {
-            0..=2 => &r.t[..r.n as usize],
-            n => &self.more_removed[r.t[0] as usize..(r.t[0] + n) as usize],
-        }
-    }
-
-    /// The record of contracting `v0` into `v1` (at `p1` before it),
-    /// deleting `removed`, its moved corners to be pushed next.
-    pub fn begin(
-        &mut self,
-        v0: u32,
-        v1: u32,
-        p1: [f32; 3],
-        removed: &[u32],
-        error: f32,
-    ) -> Contraction {
-        Contraction {
-            v0,
-            v1,
-            p1,
-            removed: self.removed_of(removed),
-            moved: self.mark()..self.mark(),
-            error,
-        }
-    }
-
-    /// Room for `n` more corners.
-    pub fn reserve_corners(&mut self, n: usize) {
-        self.corners.reserve(n);
-    }
-
-    /// The next corner's index, for `Contraction::moved`.
-    pub fn mark(&self) -> u32 {
-        self.corners.len() as u32
-    }
-
-    pub fn push_corner(&mut self, c: Corner) {
-        self.corners.push(c.triangle << 2 | u32::from(c.slot));
-    }
-
-    /// Moves the corner of triangle `t` (`tri`) at `v0` to `v1` and logs it;
-    /// returns its slot, `None` when `tri` has no corner at `v0`.
-    pub fn move_corner(&mut self, tri: &mut [u32; 3], t: u32, v0: u32, v1: u32) -> Option<usize> {
-        let slot = tri.iter().position(|&x| x == v0)?;
-        tri[slot] = v1;
-        self.push_corner(Corner {
-            triangle: t,
-            slot: slot as u8,
-        });
-        Some(slot)
-    }
-
-    pub fn moved(&self, c: &Contraction) -> impl Iterator<Item = Corner> + '_ {
-        self.corners[c.moved.start as usize..c.moved.end as usize]
-            .iter()
-            .map(|&k| Corner {
-                triangle: k >> 2,
-                slot: (k & 3) as u8,
-            })
-    }
-
-    /// Writes out the wedge edits left implied by one wedge per vertex
-    /// (`vw`, `Features::edits_implied`): `[vw[v0], vw[v1]]` for every
-    /// corner moved so far, the contraction in progress (`v0` into `v1`,
-    /// not yet in `records`) included but its last corner, whose edit the
-    /// caller pushes.
-    pub fn spell_out_wedges(&mut self, vw: &[u32], [v0, v1]: [u32; 2]) {
-        debug_assert!(self.wedges.is_empty());
-        self.wedges.reserve(self.corners.len());
-        for r in &self.records {
-            let e = [vw[r.v0 as usize], vw[r.v1 as usize]];
-            let n = (r.moved.end - r.moved.start) as usize;
-            self.wedges.extend(std::iter::repeat_n(e, n));
-        }
-        let e = [vw[v0 as usize], vw[v1 as usize]];
-        self.wedges.resize(self.corners.len() - 1, e);
-    }
-
-    /// Rewrites the corner arena in record order, after `records` were
-    /// reordered (`moved` ranges pointing anywhere into the arena): each
-    /// record's corners then follow the previous record's, as `push_corner`
-    /// leaves them (`pop` and `spell_out_wedges` rely on it). Without
-    /// wedge edits (they are not reordered).
-    pub fn reorder_corners(&mut self) {
-        debug_assert!(self.wedges.is_empty());
-        let mut corners = Vec::with_capacity(self.corners.capacity());
-        for r in &mut self.records {
-            let start = corners.len() as u32;
-            corners.extend_from_slice(&self.corners[r.moved.start as usize..r.moved.end as usize]);
-            r.moved = start..corners.len() as u32;
-        }
-        self.corners = corners;
-    }
-
-    /// Remove the newest record and its corners.
-    pub fn pop(&mut self) -> Option<Contraction> {
-        let c = self.records.pop()?;
-        self.corners.truncate(c.moved.start as usize);
-        if c.removed.n > 2 {
-            self.more_removed.truncate(c.removed.t[0] as usize);
-        }
-        self.wedges
-            .truncate(self.wedges.len().min(c.moved.start as usize));
-        Some(c)
-    }
-}
+/// Splits built between two frees of the log's records they read (7 MB of
+/// splits; each chunk is one parallel pass). Five in the unit tests, so
+/// that their small meshes take many chunks.
+const SPLIT_CHUNK: usize = if cfg!(test) { 5 } else { 1 << 16 };
 
 impl ProgressiveMesh {
     /// Build from the simplifier's final state and log (collapse order).
@@ -251,16 +70,18 @@ impl ProgressiveMesh {
     /// each vertex's one wedge when the log left every wedge edit implied
     /// by it (`Features::edits_implied`) — then `wedges` may be `None`,
     /// every corner having its vertex's wedge (`Features::corners_implied`).
+    /// The log is emptied as its splits are built (its memory returned).
     pub(crate) fn from_log(
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
         vertex_alive: &[bool],
         triangle_alive: &[bool],
-        log: &Log,
+        log: &mut Log,
         wedges: Option<&[[u32; 3]]>,
         implied: Option<&[u32]>,
     ) -> ProgressiveMesh {
         let records = &log.records;
+        let n = records.len();
         let Numbering {
             vnew,
             tnew,
@@ -296,37 +117,50 @@ impl ProgressiveMesh {
             }
         };
         let explicit = wedges.is_some() && per_vertex.is_none();
-        let b = SplitBuilder {
-            positions,
-            triangles,
-            log,
-            // (read for the explicit edits only)
-            wedges: wedges.filter(|_| explicit),
-            vnew: &vnew,
-            tnew: &tnew,
-        };
-        let n = records.len();
-        let item = |k: usize| {
-            b.prefetch_ahead(k);
-            (&records[n - 1 - k], &p_merged[k])
-        };
-        let (splits, split_wedges): (Vec<VertexSplit>, Vec<SplitWedges>) = if explicit {
-            (0..n)
-                .into_par_iter()
-                .map_init(Vec::new, |buf, k| {
-                    let (s, w) = b.build(buf, item(k));
-                    (s, w.unwrap_or_default())
-                })
-                .unzip()
-        } else {
-            (
-                (0..n)
+        // Split k undoes record n - 1 - k: the splits are built newest record
+        // first, a chunk at a time, and the log's records and corners that
+        // a chunk read are freed before the next (peak memory: at 4.4M
+        // triangles the whole log beside the splits, 112 bytes each, was
+        // the simplification's peak).
+        let mut splits: Vec<VertexSplit> = Vec::with_capacity(n);
+        let mut split_wedges: Vec<SplitWedges> = Vec::new();
+        if explicit {
+            split_wedges.reserve(n);
+        }
+        for k0 in (0..n).step_by(SPLIT_CHUNK) {
+            let k1 = (k0 + SPLIT_CHUNK).min(n);
+            let b = SplitBuilder {
+                positions,
+                triangles,
+                log,
+                // (read for the explicit edits only)
+                wedges: wedges.filter(|_| explicit),
+                vnew: &vnew,
+                tnew: &tnew,
+            };
+            let item = |k: usize| {
+                b.prefetch_ahead(k, n);
+                (&log.records[n - 1 - k], &p_merged[k])
+            };
+            if explicit {
+                let (s, w): (Vec<VertexSplit>, Vec<SplitWedges>) = (k0..k1)
                     .into_par_iter()
-                    .map_init(Vec::new, |buf, k| b.build(buf, item(k)).0)
-                    .collect(),
-                Vec::new(),
-            )
-        };
+                    .map_init(Vec::new, |buf, k| {
+                        let (s, w) = b.build(buf, item(k));
+                        (s, w.unwrap_or_default())
+                    })
+                    .unzip();
+                splits.extend(s);
+                split_wedges.extend(w);
+            } else {
+                splits.par_extend(
+                    (k0..k1)
+                        .into_par_iter()
+                        .map_init(Vec::new, |buf, k| b.build(buf, item(k)).0),
+                );
+            }
+            log.free_from(n - k1);
+        }
         // the corners' wedges: stored, or each corner its vertex's
         let corner_wedges = |t: u32| match (wedges, implied) {
             (Some(w), _) => w[t as usize],
@@ -654,9 +488,8 @@ impl SplitBuilder<'_> {
     /// a split prefetches what the one eight on reads directly, and the
     /// maps of the triangle corners of the one four on.
     #[inline]
-    fn prefetch_ahead(&self, k: usize) {
+    fn prefetch_ahead(&self, k: usize, n: usize) {
         let (records, vnew) = (&self.log.records, self.vnew);
-        let n = records.len();
         if k + 8 < n {
             let c = &records[n - 1 - (k + 8)];
             for &t in self.log.removed(c) {
@@ -774,5 +607,29 @@ mod tests {
         log.spell_out_wedges(&vw, [3, 4]);
         assert_eq!(log.wedges, [[10, 11], [10, 11], [13, 14], [13, 14]]);
         assert_eq!(implied_per_vertex(&[5, u32::MAX, 7], 4), [5, 0, 7, 0]);
+    }
+
+    /// The splits are built five at a time here, the log's records and
+    /// corners freed behind each chunk: the fully refined mesh is still the
+    /// input, index for index, and every level has its count of triangles.
+    /// Fails when a chunk frees records or corners not yet read (a panic
+    /// or another mesh).
+    #[test]
+    fn splits_built_in_chunks_refine_to_the_input() {
+        let m = crate::shapes::icosphere(3);
+        let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        let opts = crate::SimplifyOptions {
+            target_triangles: Some(40),
+            ..Default::default()
+        };
+        let s = crate::simplify(&m.positions, &indices, &opts).expect("a clean sphere");
+        let pm = &s.pm;
+        assert!(pm.len() > 20 * SPLIT_CHUNK, "{} splits", pm.len());
+        let input = crate::prepare(&m.positions, &indices).expect("clean").mesh;
+        assert_eq!(pm.full_in_input_order(), input);
+        let counts = pm.triangle_counts();
+        for k in (0..=pm.len()).step_by(7) {
+            assert_eq!(pm.mesh_at_splits(k).triangles.len(), counts[k]);
+        }
     }
 }

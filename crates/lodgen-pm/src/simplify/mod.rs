@@ -445,7 +445,7 @@ impl Simplifier {
             &self.tris,
             &self.alive,
             &self.tri_alive,
-            &self.log,
+            &mut self.log,
             self.features.as_ref().and_then(|f| f.wedges.as_deref()),
             self.features
                 .as_ref()
