@@ -29,7 +29,9 @@
 //! ratios are against the recorded best peer. `--meshes a,b` runs a subset;
 //! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
 //! `Schedule::Greedy` instead of its default pass schedule; `--reach` with
-//! `SimplifyOptions::reach` on (`DEFAULT_REACH_FACTOR`).
+//! `SimplifyOptions::reach` on (`DEFAULT_REACH_FACTOR`); `--polish`
+//! polishes lodgen's levels (`lodgen_pm::polish`, default options, against
+//! the welded input and its hierarchy) before they are measured.
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -93,6 +95,7 @@ struct Args {
     python: bool,
     greedy: bool,
     reach: bool,
+    polish: bool,
     fresh: bool,
 }
 
@@ -103,6 +106,7 @@ fn parse(args: &[String]) -> Result<Args> {
         python: true,
         greedy: false,
         reach: false,
+        polish: false,
         fresh: false,
     };
     let mut it = args.iter();
@@ -121,10 +125,11 @@ fn parse(args: &[String]) -> Result<Args> {
             "--no-peers" => out.python = false,
             "--greedy" => out.greedy = true,
             "--reach" => out.reach = true,
+            "--polish" => out.polish = true,
             "--fresh" => out.fresh = true,
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach, --fresh)"
+                 --reach, --polish, --fresh)"
             ),
         }
     }
@@ -219,7 +224,18 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
-        let levels = lodgen_levels(&m, args.greedy, args.reach)?;
+        let mut levels = lodgen_levels(&m, args.greedy, args.reach)?;
+        if args.polish {
+            let popts = lodgen_pm::PolishOptions::DEFAULT;
+            for level in &mut levels {
+                lodgen_pm::polish(
+                    MeshRef::new(&m.positions, &m.triangles),
+                    reference.bvh(),
+                    level,
+                    &popts,
+                );
+            }
+        }
         let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
         // levels whose recorded peers' cells may stand (all of them in a
         // quick run, which only says when a count moved)

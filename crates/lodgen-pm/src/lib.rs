@@ -27,6 +27,7 @@
 //! | [`progressive`] | the result: [`ProgressiveMesh`], its [`Cursor`], the [`VertexSplit`] records, [`levels`], [`attrfit`], [`stream`] |
 //! | [`adaptive`] | the curvature-adaptive methods ([`simplify_method`]) |
 //! | [`metric`] | sampled Hausdorff / RMS distances between two meshes |
+//! | [`polish`](mod@polish) | a level's vertices moved towards the original surface |
 //! | [`shapes`] | small generated meshes for tests, examples and benchmarks |
 //!
 //! The crate does no I/O and never prints. See ARCHITECTURE.md for the data
@@ -37,6 +38,7 @@ pub mod adaptive;
 pub mod mesh;
 #[allow(missing_docs)] // (documented by its owner, issue 15 metric work)
 pub mod metric;
+pub mod polish;
 pub mod progressive;
 pub mod shapes;
 pub mod simplify;
@@ -48,6 +50,7 @@ pub use adaptive::{
 };
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
+pub use polish::{polish, PolishOptions, PolishStats};
 pub use progressive::{attrfit, levels, stream};
 pub use progressive::{
     Corner, Corners, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog,
