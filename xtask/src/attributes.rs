@@ -47,6 +47,12 @@ pub fn run(args: &[String]) -> Result<()> {
     } else {
         lodgen_pm::Placement::Optimal
     };
+    // `--reach-off`: lodgen without `SimplifyOptions::reach` (on by default)
+    let reach = if args.iter().any(|a| a == "--reach-off") {
+        None
+    } else {
+        lodgen_pm::SimplifyOptions::DEFAULT.reach
+    };
     let name = match args.iter().position(|a| a == "--mesh") {
         Some(i) => args
             .get(i + 1)
@@ -85,7 +91,9 @@ pub fn run(args: &[String]) -> Result<()> {
     for ratio in [0.5, 0.1, 0.02] {
         let opts = BuildOptions {
             levels: LevelRequest::Specs(vec![LevelSpec::Ratio(ratio)]),
-            simplify: lodgen_pm::SimplifyOptions::DEFAULT.with_placement(placement),
+            simplify: lodgen_pm::SimplifyOptions::DEFAULT
+                .with_placement(placement)
+                .with_reach(reach),
             attribute_weights: weights,
             ..BuildOptions::default()
         };

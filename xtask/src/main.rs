@@ -38,14 +38,14 @@ tasks:
                           headless Chromium over a throttled 10 Mbit/s, 50 ms line (bunny, 1.1M bunny)
   compare [--meshes bunny,cow,fandisk] [--no-render]
                           every method + meshopt at 50/10/2%: docs/compare.md, docs/compare.png, docs/renders/
-  quality [--quick] [--meshes a,b] [--no-peers] [--greedy] [--reach] [--fresh]
+  quality [--quick] [--meshes a,b] [--no-peers] [--greedy] [--reach-off] [--fresh]
                           lodgen vs meshopt, MeshLab, Open3D, pyfqmr, fast-simplification (Python
                           peers in target/quality-venv) at 50/10/2%: docs/quality.md, docs/quality.png
                           (peers re-run only where lodgen's triangle count moved; --fresh: all)
 
   layout                  files ≤ 800 lines, functions ≤ 120 lines outside tests, no module cycles
                           (crates/*/src, xtask/src)
-  attributes [--mesh NAME] [--half-edge] [--attribute-weights=LIST]
+  attributes [--mesh NAME] [--half-edge] [--reach-off] [--attribute-weights=LIST]
                           UV / normal error of lodgen vs meshopt simplify_with_attributes on a shared
                           mesh (default spot; beetle: its own hard-edged normals)";
 

@@ -28,8 +28,8 @@
 //! (`target/quality-peers.tsv`), only lodgen is run and measured and its
 //! ratios are against the recorded best peer. `--meshes a,b` runs a subset;
 //! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
-//! `Schedule::Greedy` instead of its default pass schedule; `--reach` with
-//! `SimplifyOptions::reach` on (`DEFAULT_REACH_FACTOR`); `--polish`
+//! `Schedule::Greedy` instead of its default pass schedule; `--reach-off` with
+//! `SimplifyOptions::reach` off (it is on by default); `--polish`
 //! polishes lodgen's levels (`lodgen_pm::polish`, default options, against
 //! the welded input and its hierarchy) before they are measured.
 
@@ -94,7 +94,7 @@ struct Args {
     quick: bool,
     python: bool,
     greedy: bool,
-    reach: bool,
+    reach_off: bool,
     polish: bool,
     fresh: bool,
 }
@@ -105,7 +105,7 @@ fn parse(args: &[String]) -> Result<Args> {
         quick: false,
         python: true,
         greedy: false,
-        reach: false,
+        reach_off: false,
         polish: false,
         fresh: false,
     };
@@ -124,12 +124,12 @@ fn parse(args: &[String]) -> Result<Args> {
             "--quick" => out.quick = true,
             "--no-peers" => out.python = false,
             "--greedy" => out.greedy = true,
-            "--reach" => out.reach = true,
+            "--reach-off" => out.reach_off = true,
             "--polish" => out.polish = true,
             "--fresh" => out.fresh = true,
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach, --polish, --fresh)"
+                 --reach-off, --polish, --fresh)"
             ),
         }
     }
@@ -158,11 +158,11 @@ fn input(assets: &Path, name: &str) -> Result<Mesh> {
 }
 
 /// lodgen's levels: one run to the smallest ratio, levels cut from the log.
-fn lodgen_levels(m: &Mesh, greedy: bool, reach: bool) -> Result<Vec<Mesh>> {
+fn lodgen_levels(m: &Mesh, greedy: bool, reach_off: bool) -> Result<Vec<Mesh>> {
     let n = m.triangles.len();
     let mut opts = SimplifyOptions::DEFAULT.with_target_ratio(RATIOS[RATIOS.len() - 1]);
-    if reach {
-        opts = opts.with_reach(Some(lodgen_pm::DEFAULT_REACH_FACTOR));
+    if reach_off {
+        opts = opts.with_reach(None);
     }
     if greedy {
         opts = opts.with_schedule(lodgen_pm::Schedule::Greedy);
@@ -224,7 +224,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
-        let mut levels = lodgen_levels(&m, args.greedy, args.reach)?;
+        let mut levels = lodgen_levels(&m, args.greedy, args.reach_off)?;
         if args.polish {
             let popts = lodgen_pm::PolishOptions::DEFAULT;
             for level in &mut levels {

@@ -11,7 +11,8 @@
 //! `cluster triangles` sets `SimplifyOptions::partition` (0: off; default:
 //! the library's default).
 //! The environment variable `REACH=F` sets `SimplifyOptions::reach` to
-//! `Some(F)`.
+//! `Some(F)`, `REACH=off` to `None` (unset: the library's default,
+//! `Some(DEFAULT_REACH_FACTOR)`).
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
@@ -52,11 +53,11 @@ fn main() {
     let opts = SimplifyOptions::DEFAULT
         .with_target_ratio(ratio)
         .with_partition(partition)
-        .with_reach(
-            std::env::var("REACH")
-                .ok()
-                .map(|s| s.parse().expect("REACH: a number")),
-        );
+        .with_reach(match std::env::var("REACH") {
+            Err(_) => SimplifyOptions::DEFAULT.reach,
+            Ok(s) if s == "off" => None,
+            Ok(s) => Some(s.parse().expect("REACH: a number or off")),
+        });
     let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     let mut digest = 0;
     let mut last = None;

@@ -597,10 +597,11 @@ fn measure_bounded_is_at_least_the_sampled_estimate() {
     }
 }
 
-/// `--reach` keeps the tips of thin parts: the cow's tail tip is the 50 %
-/// level's Hausdorff maximum without it (0.56 % of the diagonal) and is kept
-/// with it (0.17 %, docs/quality.md). Without a value the factor is
-/// `DEFAULT_REACH_FACTOR`; a factor that is not positive is refused.
+/// `--reach` (on by default) keeps the tips of thin parts: the cow's tail
+/// tip is the 50 % level's Hausdorff maximum with `--reach off` (0.56 % of
+/// the diagonal) and is kept by default (0.17 %, docs/quality.md). Without
+/// a value the factor is `DEFAULT_REACH_FACTOR`, as by default; a factor
+/// that is not positive, or a word other than "off", is refused.
 #[test]
 fn reach_lowers_the_cows_hausdorff_error() {
     let Some(input) = lodgen::assets::shared_asset("cow.obj") else {
@@ -628,17 +629,27 @@ fn reach_lowers_the_cows_hausdorff_error() {
             .unwrap();
         (h, std::fs::read(&out).unwrap())
     };
-    let (h_off, _) = run(&[], "off");
-    let (h_on, bytes_on) = run(&["--reach"], "on");
+    let (h_off, _) = run(&["--reach", "off"], "off");
+    let (h_on, bytes_on) = run(&[], "on");
+    let (_, bytes_flag) = run(&["--reach"], "flag");
     let factor = lodgen_pm::DEFAULT_REACH_FACTOR.to_string();
     let (_, bytes_factor) = run(&["--reach", &factor], "factor");
-    assert!(h_on < 0.6 * h_off, "--reach {h_on} % against {h_off} %");
+    assert!(
+        h_on < 0.6 * h_off,
+        "default {h_on} % against --reach off {h_off} %"
+    );
+    assert_eq!(
+        bytes_on, bytes_flag,
+        "--reach without a value is not the default"
+    );
     assert_eq!(
         bytes_on, bytes_factor,
-        "--reach without a value is not --reach {factor}"
+        "the default is not --reach {factor}"
     );
-    let o = lodgen(&[input.to_str().unwrap(), "--reach", "0"]);
-    assert!(!o.status.success());
-    assert!(stderr(&o).contains("--reach"), "{}", stderr(&o));
+    for bad in ["0", "-1", "on"] {
+        let o = lodgen(&[input.to_str().unwrap(), "--reach", bad]);
+        assert!(!o.status.success(), "--reach {bad} accepted");
+        assert!(stderr(&o).contains("--reach"), "{}", stderr(&o));
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }

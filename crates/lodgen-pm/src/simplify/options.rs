@@ -57,7 +57,7 @@ pub const DEFAULT_PASS_FACTOR: f32 = 1.5;
 /// the 1.1M-triangle bench mesh this gives 68 clusters).
 pub const DEFAULT_CLUSTER_TRIANGLES: usize = 16_384;
 
-/// The factor of [`SimplifyOptions::reach`] when on. Measured by `cargo
+/// The factor of [`SimplifyOptions::reach`] (its default). Measured by `cargo
 /// xtask quality --quick` over 0.7–4 (geometric mean of lodgen / best peer
 /// over 21 cells; off: Hausdorff 1.172, RMS 1.055): 1.0 gives 1.116 /
 /// 1.034, 1.05 1.063 / 1.034, 1.1 1.012 / 1.032, 1.2 1.069 / 1.036, 4
@@ -123,12 +123,13 @@ pub struct SimplifyOptions {
     /// whose error² is at least 0.1 × the limit): the quadric cost
     /// underrates contractions at the tips of thin parts (a tail, a horn,
     /// a spout), whose faces are nearly parallel to the way the tip moves.
-    /// Default value: `None` (opt in with `Some(DEFAULT_REACH_FACTOR)`):
+    /// Default value: `Some(DEFAULT_REACH_FACTOR)` (`None` turns it off):
     /// it lowers the error against the other simplifiers (`cargo xtask
-    /// quality --quick --reach`: geometric mean of lodgen / best peer,
-    /// Hausdorff 1.179 → 1.014, RMS 1.055 → 1.027) but costs ~14 % more
-    /// simplification CPU on the bunny (the reach test of every planned
-    /// pair; docs/performance.md), and raises three cells (docs/quality.md).
+    /// quality --quick`, geometric mean of lodgen / best peer over the
+    /// quick run's cells: Hausdorff 1.14 → 0.92, RMS 1.03 → 0.96, see
+    /// docs/quality.md) for ≈ 11 % more simplification instructions on
+    /// the bunny (the reach test of every planned pair; +2–5 % of a whole
+    /// CLI run's CPU with measurement; docs/performance.md).
     pub reach: Option<f64>,
     /// When no contraction that keeps the topology is left before the
     /// target, go on with the refused kinds allowed, one kind more each
@@ -164,7 +165,7 @@ impl SimplifyOptions {
             factor: DEFAULT_PASS_FACTOR,
         },
         partition: Some(DEFAULT_CLUSTER_TRIANGLES),
-        reach: None,
+        reach: Some(DEFAULT_REACH_FACTOR),
         allow_topology_change: false,
     };
     /// Stop at `n` triangles.

@@ -95,6 +95,8 @@ def _argv(options: dict) -> List[str]:
             raise LodgenError(f"{key}= is not an option here; pass paths as arguments")
         if key == "measure" and isinstance(value, (bool, np.bool_)):
             value = "on" if value else "off"
+        if key == "reach" and (value is None or value is False):
+            value = "off"  # (on by default: reach=False turns it off)
         if value is None or value is False:
             continue
         flag = "--" + key.replace("_", "-")
@@ -334,7 +336,9 @@ def simplify(
     (0, 1], or ``"50%"``) or triangle counts (ints); ``max_error=[0.1, 0.5]``
     builds levels by measured error (% of the bounding-box diagonal)
     instead. Other options are the command's flags (``tau``, ``boundary``,
-    ``placement``, ``schedule``, ``method``, ``samples``, ...).
+    ``placement``, ``schedule``, ``method``, ``samples``, ...); ``reach``
+    (on by default: the tips of thin parts kept) takes a factor, or
+    ``reach=False`` (or ``None``, as in Rust) to turn it off.
 
     Levels come finest first (as the command writes them), whatever the
     order asked. Each level's vertices have the input's float dtype, faces
