@@ -22,6 +22,7 @@ impl Simplifier {
         } = plan;
         if let Some(r) = broke {
             self.stats.relaxed.count(r);
+            self.pass.refused += 1;
         }
         let (i0, i1) = (v0 as usize, v1 as usize);
         let merged = fv(p);

@@ -214,6 +214,10 @@ struct Pass {
     /// raised a stage each time the run is stuck; back to none after a
     /// pass that made a contraction).
     relax: legality::Relax,
+    /// Candidates of this pass the topology rules refused (or that broke
+    /// one, relaxed): the next pass relaxes them when they outnumber its
+    /// contractions by `RELAX_SHARE` ([`SimplifyOptions::allow_topology_change`]).
+    refused: usize,
 }
 
 #[inline]

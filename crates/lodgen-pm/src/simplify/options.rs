@@ -141,7 +141,11 @@ pub struct SimplifyOptions {
     /// edges, material borders) leaving their lines, then faces turning
     /// over or collapsing to slivers. Each stage runs in cost order; with
     /// [`Schedule::Passes`] a pass that made any contraction is followed
-    /// by one with every rule back. Every contraction is still a vertex
+    /// by one with every rule back, unless the topology rules held it
+    /// (refused more than a quarter as many candidates as it contracted):
+    /// then the next relaxes joins and flattening, so a mesh whose
+    /// topology holds its triangles (beetle) changes it where that is
+    /// cheapest instead of forcing costly contractions first. Every contraction is still a vertex
     /// split of the log (replay stays exact); `Stats::relaxed` counts them
     /// by the rule they broke. Locked vertices ([`Boundary::Locked`])
     /// stay locked and `max_error` still binds. Default value: `false`:

@@ -182,12 +182,7 @@ impl Simplifier {
                     pass.removed += before - self.live_tris;
                     pass.collapses += 1;
                 }
-                Err(r) => {
-                    if r == Rejected::Error {
-                        self.pass.error_rejections += 1;
-                    }
-                    self.stats.rejected.count(r);
-                }
+                Err(r) => self.count_rejection(r),
             }
         }
         // the rest of the scanned range was touched: skipped, as step_pass would
