@@ -226,16 +226,30 @@ fn build_mesh(
     };
     let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
     let side_by_side = input_triangles < SIDE_BY_SIDE_MAX_TRIANGLES;
-    let extracted = if side_by_side {
+    let extracted = if let Some(popts) = &opts.polish {
+        // (the polish needs the original's hierarchy first)
+        let polish = Polish {
+            measurer: &measurer,
+            opts: popts,
+        };
+        extract_levels(
+            mesh,
+            &flat,
+            &simplified,
+            &splits,
+            opts.measured,
+            Some(polish),
+        )?
+    } else if side_by_side {
         // (the original's hierarchy built on the other core meanwhile)
         let (extracted, prepared) = rayon::join(
-            || extract_levels(mesh, &flat, &simplified, &splits, opts.measured),
+            || extract_levels(mesh, &flat, &simplified, &splits, opts.measured, None),
             || measurer.prepare(),
         );
         prepared?;
-        extracted
+        extracted?
     } else {
-        extract_levels(mesh, &flat, &simplified, &splits, opts.measured)
+        extract_levels(mesh, &flat, &simplified, &splits, opts.measured, None)?
     };
     drop(flat);
     if let (false, Cow::Owned(m)) = (opts.keep_input, &mut *mesh) {
@@ -355,14 +369,21 @@ fn extract_levels(
     simplified: &Simplified,
     splits: &[usize],
     measured: bool,
-) -> Vec<Extracted> {
+    polish: Option<Polish<'_, '_>>,
+) -> Result<Vec<Extracted>, BuildError> {
     let pm = &simplified.pm;
     let mut cursor = pm.cursor();
     let fit_source = FitSource::new(mesh, flat, simplified);
     let mut out = Vec::with_capacity(splits.len());
+    let mut polished = Mesh::default();
     for &k in splits {
         cursor.seek(k);
-        let m = cursor.mesh();
+        let mut m = cursor.mesh();
+        if let (Some(p), true) = (&polish, k < pm.len()) {
+            polished.clone_from(m);
+            p.measurer.polish(&mut polished, p.opts)?;
+            m = &polished;
+        }
         // a level below the input gets fitted values (module docs)
         let fitted = match (&fit_source, cursor.wedges()) {
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
@@ -373,7 +394,14 @@ fn extract_levels(
             mesh: (measured && k < pm.len()).then(|| m.clone()),
         });
     }
-    out
+    Ok(out)
+}
+
+/// The polish of the written levels ([`BuildOptions::polish`]): the
+/// measurer holds the original's hierarchy it moves vertices against.
+struct Polish<'m, 'a> {
+    measurer: &'m Measurer<'a>,
+    opts: &'m lodgen_pm::PolishOptions,
 }
 
 /// Whether measuring the levels cannot fail: the original and every level

@@ -55,6 +55,11 @@ pub struct BuildOptions {
     /// every other part of the mesh (attributes, materials, names). The CLI
     /// keeps the input for `--progressive` only, whose stream reads it.
     pub keep_input: bool,
+    /// Move each written level's vertices towards the original after
+    /// simplification ([`lodgen_pm::polish`]; `None`: off, the default).
+    /// The written levels and their measured errors are the polished ones;
+    /// the progressive mesh and its stream keep the simplifier's positions.
+    pub polish: Option<lodgen_pm::PolishOptions>,
 }
 
 /// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
@@ -118,6 +123,7 @@ impl Default for BuildOptions {
             meter: None,
             keep_progressive: true,
             keep_input: true,
+            polish: None,
         }
     }
 }
