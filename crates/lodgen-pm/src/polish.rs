@@ -47,6 +47,7 @@
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
+use crate::metric::triangle::{cross, dot, sub};
 use crate::metric::{MeshRef, TriangleBvh};
 
 /// How a level is polished.
@@ -182,22 +183,6 @@ impl Acc {
         };
         [col(0) / det, col(1) / det, col(2) / det]
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn widen(p: [f32; 3]) -> [f64; 3] {

@@ -33,7 +33,7 @@
 use rayon::prelude::*;
 
 use super::bvh::{Hint, TriangleBvh};
-use super::triangle::{dot, sub, widen};
+use super::triangle::{cross, dot, sub, widen};
 use super::MeshRef;
 
 /// When a cell counts as settled: its upper bound is at most `L (1 + relative) + absolute`
@@ -416,15 +416,6 @@ fn circumsphere([a, b, c]: [[f64; 3]; 3]) -> Option<([f64; 3], f64)> {
     let off: [f64; 3] = std::array::from_fn(|k| (t1[k] + t2[k]) / (2.0 * n2));
     let centre = std::array::from_fn(|k| a[k] + off[k]);
     Some((centre, dot(off, off)))
-}
-
-#[inline(always)]
-fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
 }
 
 #[cfg(test)]

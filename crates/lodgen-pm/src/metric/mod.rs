@@ -35,7 +35,7 @@ pub mod bvh;
 pub mod measure;
 mod options;
 mod sampling;
-mod triangle;
+pub(crate) mod triangle;
 mod zorder;
 
 pub use bvh::TriangleBvh;

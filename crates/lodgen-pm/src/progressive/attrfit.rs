@@ -37,6 +37,7 @@
 //! meaning (renormalising normals, …) is the caller's.
 
 use crate::metric::bvh::TriangleBvh;
+use crate::metric::triangle::{cross, dot, sub};
 use crate::metric::MeshRef;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -554,19 +555,6 @@ pub fn barycentric(t: [[f64; 3]; 3], q: [f64; 3]) -> [f64; 3] {
     [1.0 - v - w, v, w]
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
