@@ -338,7 +338,12 @@ def simplify(
     instead. Other options are the command's flags (``tau``, ``boundary``,
     ``placement``, ``schedule``, ``method``, ``samples``, ...); ``reach``
     (on by default: the tips of thin parts kept) takes a factor, or
-    ``reach=False`` (or ``None``, as in Rust) to turn it off.
+    ``reach=False`` (or ``None``, as in Rust) to turn it off;
+    ``polish=True`` moves each returned level's vertices towards the input
+    (lower error, same triangles; the progressive mesh keeps the
+    simplifier's positions); ``allow_topology_change=True`` lets a level
+    reach a count the topology would stop above (holes close, sheets
+    join; ``result.note`` says when a level stopped above its count).
 
     Levels come finest first (as the command writes them), whatever the
     order asked. Each level's vertices have the input's float dtype, faces

@@ -239,3 +239,29 @@ def test_measure_off_keeps_the_levels_and_says_so():
     assert np.isnan(off.levels[0].errors.rms) and not np.isnan(on.levels[0].errors.rms)
     assert off.levels[0].errors.hausdorff > 0
     assert not lodgen.simplify(v, f, levels=[0.1], measure="off").measured
+
+
+def test_polish_moves_the_written_levels_towards_the_input():
+    v, f = torus()
+    plain = lodgen.simplify(v, f, levels=[0.1, 0.02])
+    polished = lodgen.simplify(v, f, levels=[0.1, 0.02], polish=True)
+    for a, b in zip(plain.levels, polished.levels):
+        # same triangles, other positions, closer to the torus
+        np.testing.assert_array_equal(a.faces, b.faces)
+        assert not np.array_equal(a.vertices, b.vertices)
+        assert b.errors.rms < 0.95 * a.errors.rms, (a.errors, b.errors)
+        assert b.errors.hausdorff < a.errors.hausdorff, (a.errors, b.errors)
+
+
+def test_allow_topology_change_reaches_a_count_the_topology_stops():
+    # a closed torus keeps its hole: the default stops above 16 triangles
+    # and says why; allowed to join sheets, it reaches the count
+    v, f = torus()
+    kept = lodgen.simplify(v, f, levels=[16])
+    assert len(kept.levels[0].faces) > 16
+    assert "allow-topology-change" in kept.note, kept.note
+    changed = lodgen.simplify(v, f, levels=[16], allow_topology_change=True)
+    assert len(changed.levels[0].faces) == 16
+    assert changed.note == ""
+    v_l, f_l = changed.progressive.mesh_at_splits(changed.levels[0].splits)
+    assert len(f_l) == 16
