@@ -45,6 +45,37 @@ fn report(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
+/// `lodgen INPUT --levels LEVELS -o DIR/NAME.glb --report DIR/NAME.json
+/// EXTRA…`, which must succeed: the report's first mesh's levels and the
+/// written file's bytes.
+fn build_with_report(
+    input: &Path,
+    levels: &str,
+    d: &Path,
+    name: &str,
+    extra: &[&str],
+) -> (Vec<serde_json::Value>, Vec<u8>) {
+    let rep = d.join(format!("{name}.json"));
+    let out = d.join(format!("{name}.glb"));
+    let mut args = vec![
+        input.to_str().unwrap(),
+        "--levels",
+        levels,
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = lodgen(&args);
+    assert!(o.status.success(), "{name}: {}", stderr(&o));
+    let levels = report(&rep)["meshes"][0]["levels"]
+        .as_array()
+        .unwrap()
+        .clone();
+    (levels, std::fs::read(&out).unwrap())
+}
+
 #[test]
 fn builds_three_levels_with_a_table_and_a_report() {
     let d = tmp("three");
@@ -610,24 +641,8 @@ fn reach_lowers_the_cows_hausdorff_error() {
     };
     let d = tmp("reach");
     let run = |extra: &[&str], name: &str| {
-        let rep = d.join(format!("{name}.json"));
-        let out = d.join(format!("{name}.glb"));
-        let mut args = vec![
-            input.to_str().unwrap(),
-            "--levels",
-            "50%",
-            "-o",
-            out.to_str().unwrap(),
-            "--report",
-            rep.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let o = lodgen(&args);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let h = report(&rep)["meshes"][0]["levels"][0]["hausdorff_percent"]
-            .as_f64()
-            .unwrap();
-        (h, std::fs::read(&out).unwrap())
+        let (levels, bytes) = build_with_report(&input, "50%", &d, name, extra);
+        (levels[0]["hausdorff_percent"].as_f64().unwrap(), bytes)
     };
     let (h_off, _) = run(&["--reach", "off"], "off");
     let (h_on, bytes_on) = run(&[], "on");
@@ -665,24 +680,8 @@ fn polish_lowers_the_written_levels_errors() {
     let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/knot.obj");
     let d = tmp("polish");
     let run = |extra: &[&str], name: &str| {
-        let rep = d.join(format!("{name}.json"));
-        let out = d.join(format!("{name}.glb"));
-        let mut args = vec![
-            input.to_str().unwrap(),
-            "--levels",
-            "10%,2%",
-            "-o",
-            out.to_str().unwrap(),
-            "--report",
-            rep.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let o = lodgen(&args);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let levels = report(&rep)["meshes"][0]["levels"].clone();
+        let (levels, bytes) = build_with_report(&input, "10%,2%", &d, name, extra);
         let levels: Vec<(u64, f64, f64)> = levels
-            .as_array()
-            .unwrap()
             .iter()
             .map(|l| {
                 (
@@ -692,7 +691,7 @@ fn polish_lowers_the_written_levels_errors() {
                 )
             })
             .collect();
-        (levels, std::fs::read(&out).unwrap())
+        (levels, bytes)
     };
     let (plain, plain_bytes) = run(&[], "plain");
     let (polished, polished_bytes) = run(&["--polish"], "polished");
