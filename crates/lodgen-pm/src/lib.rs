@@ -135,7 +135,49 @@ pub fn simplify_with_wedges_metered(
     opts: &SimplifyOptions,
     meter: Option<std::sync::Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
-    if let Some(m) = &meter {
+    check_attributes(positions, attributes, dims, meter.as_deref())?;
+    let prepared = prepare(positions, indices)?;
+    simplify_prepared(prepared, indices, attributes, dims, opts, meter)
+}
+
+/// [`simplify_with_wedges_metered`], with `beside` run on another thread
+/// while the mesh is simplified: it gets a copy of the prepared (welded,
+/// cleaned) mesh, put in `welded`, which the progressive mesh refines back
+/// to (numbered as [`prepare`] numbers it, not as the progressive mesh does:
+/// `pm.vertex_origin` and `pm.triangle_origin` map one to the other).
+/// For work that needs only the input, such as the hierarchy its levels
+/// will be measured against, on a core the simplification leaves idle most
+/// of the time. `beside` is not run when the input is rejected.
+#[allow(clippy::too_many_arguments)]
+pub fn simplify_with_wedges_beside<'m, R: Send>(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
+    opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
+    welded: &'m mut Option<Mesh>,
+    beside: impl FnOnce(&'m Mesh) -> R + Send,
+) -> Result<(Simplified, R), MeshError> {
+    check_attributes(positions, attributes, dims, meter.as_deref())?;
+    let prepared = prepare(positions, indices)?;
+    let copy: &'m Mesh = welded.insert(prepared.mesh.clone());
+    let (simplified, r) = rayon::join(
+        || simplify_prepared(prepared, indices, attributes, dims, opts, meter),
+        || beside(copy),
+    );
+    Ok((simplified?, r))
+}
+
+/// The attribute values' length against the vertex count (the first check
+/// of the wedged entry points, before preparation).
+fn check_attributes(
+    positions: &[[f32; 3]],
+    attributes: &[f32],
+    dims: usize,
+    meter: Option<&Meter>,
+) -> Result<(), MeshError> {
+    if let Some(m) = meter {
         m.set_stage(Stage::Preparing);
     }
     if attributes.len() != dims * positions.len() {
@@ -145,7 +187,18 @@ pub fn simplify_with_wedges_metered(
             vertex_count: positions.len(),
         });
     }
-    let prepared = prepare(positions, indices)?;
+    Ok(())
+}
+
+/// The simplification of the wedged entry points, from the prepared mesh.
+fn simplify_prepared(
+    prepared: Prepared,
+    indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
+    opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
+) -> Result<Simplified, MeshError> {
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     let wedges = prepared
         .triangle_map

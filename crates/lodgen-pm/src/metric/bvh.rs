@@ -72,6 +72,8 @@ pub struct TriangleBvh {
     points: Vec<[f32; 3]>,
     /// Input triangle index of each slot of `tris`.
     ids: Vec<u32>,
+    /// Two triangles share a Morton code: their leaf order is their numbering's.
+    tied: bool,
 }
 
 /// `f64::max` without its NaN handling (one `maxsd`); inputs are finite.
@@ -180,6 +182,7 @@ impl TriangleBvh {
         // (the 4-wide tree directly, a chunk of the binary tree at a time: the whole binary
         // tree, 41 bytes a triangle, beside the 4-wide nodes was the measurement's peak)
         let wide = wide_tree(&z.codes, corners);
+        let tied = z.tied();
         // (the codes are not read again: freed before the leaves are copied)
         let ZOrder { ids, codes } = z;
         drop(codes);
@@ -194,6 +197,7 @@ impl TriangleBvh {
                 tris,
                 points,
                 ids: Vec::new(),
+                tied,
             };
         };
         TriangleBvh {
@@ -209,7 +213,22 @@ impl TriangleBvh {
             tris,
             points,
             ids,
+            tied,
         }
+    }
+
+    /// The hierarchy of the same triangles numbered anew (`triangle_new[t]` the new number of
+    /// triangle `t`; corners and positions unchanged): the one built over the renumbered mesh,
+    /// bit for bit, unless two triangles share a Morton code (`None`: their leaf order would
+    /// follow the new numbering).
+    pub(super) fn renumbered(mut self, triangle_new: &[u32]) -> Option<TriangleBvh> {
+        if self.tied {
+            return None;
+        }
+        for t in &mut self.ids {
+            *t = *triangle_new.get(*t as usize)?;
+        }
+        Some(self)
     }
 
     /// Triangle indices in leaf order: the Z-order of their centroids ([`zorder::triangles`]).

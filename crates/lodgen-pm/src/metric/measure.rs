@@ -189,6 +189,30 @@ impl<'a> Reference<'a> {
         }
     }
 
+    /// The reference of `a`, the same mesh as this one's with its vertices and triangles
+    /// renumbered (`vertex_new[v]`, `triangle_new[t]`: the new numbers of this mesh's `v` and
+    /// `t`; positions and each triangle's corner order unchanged), without building anything:
+    /// what [`Self::new`]`(a)` gives, bit for bit. For a hierarchy built before the numbering
+    /// was known (over the welded input, beside its simplification). `None` when `a` is not
+    /// that renumbering, or when two triangles' centroids or two vertices share a Morton code
+    /// (their order along the curve would follow the new numbering): then build anew.
+    pub fn renumbered<'b>(
+        self,
+        a: MeshRef<'b>,
+        vertex_new: &[u32],
+        triangle_new: &[u32],
+    ) -> Option<Reference<'b>> {
+        if !is_renumbering(self.mesh, a, vertex_new, triangle_new) {
+            return None;
+        }
+        Some(Reference {
+            mesh: a,
+            bvh: self.bvh.renumbered(triangle_new)?,
+            samples: self.samples.renumbered(vertex_new)?,
+            diagonal: a.bbox_diagonal(),
+        })
+    }
+
     /// The original's hierarchy.
     pub fn bvh(&self) -> &TriangleBvh {
         &self.bvh
@@ -237,6 +261,44 @@ impl<'a> Reference<'a> {
             diagonal: self.diagonal,
         }
     }
+}
+
+/// Whether `b` is `a` renumbered: `vertex_new` and `triangle_new` are one-to-one onto `b`'s
+/// vertices and triangles, each vertex keeps its position bits and each triangle its corners
+/// in order.
+fn is_renumbering(
+    a: MeshRef<'_>,
+    b: MeshRef<'_>,
+    vertex_new: &[u32],
+    triangle_new: &[u32],
+) -> bool {
+    let (nv, nt) = (a.positions.len(), a.triangles.len());
+    if b.positions.len() != nv
+        || b.triangles.len() != nt
+        || vertex_new.len() != nv
+        || triangle_new.len() != nt
+    {
+        return false;
+    }
+    let bits = |p: [f32; 3]| p.map(f32::to_bits);
+    let mut seen = vec![false; nv];
+    for (v, &n) in vertex_new.iter().enumerate() {
+        let n = n as usize;
+        if n >= nv || seen[n] || bits(b.positions[n]) != bits(a.positions[v]) {
+            return false;
+        }
+        seen[n] = true;
+    }
+    let mut seen = vec![false; nt];
+    for (t, &n) in triangle_new.iter().enumerate() {
+        let n = n as usize;
+        let corners = a.triangles[t].map(|v| vertex_new.get(v as usize).copied());
+        if n >= nt || seen[n] || corners != b.triangles[n].map(Some) {
+            return false;
+        }
+        seen[n] = true;
+    }
+    true
 }
 
 /// One-sided distance from the points of `from` to the surface in `to`, with

@@ -280,6 +280,8 @@ pub(super) struct SampleSet {
     pub cumulative: Vec<f64>,
     /// Used vertices along the curve.
     pub vertices: Vec<u32>,
+    /// Two used vertices share a Morton code: their order is their numbering's.
+    pub tied: bool,
 }
 
 impl SampleSet {
@@ -293,10 +295,25 @@ impl SampleSet {
                 total
             })
             .collect();
+        let (vertices, tied) = zorder::vertices(mesh);
         SampleSet {
             cumulative,
-            vertices: zorder::vertices(mesh),
+            vertices,
+            tied,
         }
+    }
+
+    /// The set of the same mesh with its vertices renumbered (`vertex_new[v]` the new number
+    /// of `v`) and its triangles along the same order: the set built anew, bit for bit, unless
+    /// two vertices share a code (`None`: their order would follow the new numbering).
+    pub(super) fn renumbered(mut self, vertex_new: &[u32]) -> Option<SampleSet> {
+        if self.tied {
+            return None;
+        }
+        for v in &mut self.vertices {
+            *v = *vertex_new.get(*v as usize)?;
+        }
+        Some(self)
     }
 }
 

@@ -71,8 +71,8 @@ pub(super) fn triangles(mesh: MeshRef<'_>) -> ZOrder {
 }
 
 /// The vertices the triangles of the validated `mesh` use, in Z-order over their box (ties by
-/// index).
-pub(super) fn vertices(mesh: MeshRef<'_>) -> Vec<u32> {
+/// index), and whether two of them share a code (then the order depends on their numbering).
+pub(super) fn vertices(mesh: MeshRef<'_>) -> (Vec<u32>, bool) {
     let (lo, hi) = used_box(mesh);
     let mut used = vec![false; mesh.positions.len()];
     for t in mesh.triangles {
@@ -80,13 +80,21 @@ pub(super) fn vertices(mesh: MeshRef<'_>) -> Vec<u32> {
             used[v as usize] = true;
         }
     }
-    sorted(
+    let z = sorted(
         (0..mesh.positions.len())
             .filter(|&v| used[v])
             .map(|v| (morton(widen(mesh.positions[v]), lo, hi), v as u32))
             .collect::<Vec<_>>(),
-    )
-    .ids
+    );
+    let tied = z.tied();
+    (z.ids, tied)
+}
+
+impl ZOrder {
+    /// Whether two items share a code (then their order is their numbering's).
+    pub fn tied(&self) -> bool {
+        self.codes.windows(2).any(|w| w[0] == w[1])
+    }
 }
 
 /// Conversion of the two inputs of [`sorted`]: codes of items `0..n`, or `(code, id)` pairs.

@@ -3,9 +3,9 @@
 //! and extract → screen coverages. [`MeshBuild`] is what comes out.
 
 use std::borrow::Cow;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef};
+use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::{
     levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
     SimplifyOptions,
@@ -20,7 +20,7 @@ use super::flat::{flatten, Flat};
 use super::measure::Measurer;
 use super::options::{BuildOptions, LevelRequest, Progress};
 use super::select::select_splits;
-use super::wedges::simplify_wedged;
+use super::wedges::{simplify_wedged, simplify_wedged_beside};
 
 /// What happened to one mesh, beside its [`LodMesh`].
 #[derive(Clone, Debug)]
@@ -210,13 +210,25 @@ fn build_mesh(
         source,
     };
     let sopts = simplify_options(opts, flat.indices.len() / 3)?;
+    let side_by_side = input_triangles < SIDE_BY_SIDE_MAX_TRIANGLES;
+    // (a level will be measured: the target is below the input)
+    let early = side_by_side
+        && opts.measured
+        && opts.method == Method::Qem
+        && sopts.target_triangles.is_none_or(|t| t < input_triangles);
     let t_build = Instant::now();
-    let mut simplified = simplify(mesh, &flat, opts, &sopts).map_err(mesh_err)?;
+    let mut welded = None;
+    let (mut simplified, early) =
+        simplify(mesh, &flat, opts, &sopts, early.then_some(&mut welded)).map_err(mesh_err)?;
     let simplify_time = t_build.elapsed();
     return_freed_memory(input_triangles);
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
+    if let Some((r, took)) = early.and_then(|e| e.renumbered(pm, &full)) {
+        measurer.set_reference(r, took);
+    }
+    drop(welded);
     let mut measuring = |level: usize, of: usize| {
         progress(Progress::Measuring {
             mesh: index,
@@ -225,7 +237,6 @@ fn build_mesh(
         })
     };
     let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
-    let side_by_side = input_triangles < SIDE_BY_SIDE_MAX_TRIANGLES;
     let extracted = if let Some(popts) = &opts.polish {
         // (the polish needs the original's hierarchy first)
         let polish = Polish {
@@ -324,31 +335,88 @@ fn simplify_options(opts: &BuildOptions, full_tris: usize) -> Result<SimplifyOpt
     Ok(sopts)
 }
 
+/// The original's hierarchy built beside the simplification, over the
+/// welded input ([`simplify`] with a slot for it).
+struct Early<'m> {
+    reference: Result<Reference<'m>, lodgen_pm::metric::MeshError>,
+    /// Wall time of the hierarchy's build.
+    took: Duration,
+}
+
+impl Early<'_> {
+    /// The hierarchy renumbered as `pm` numbers the original (`full`, `pm`
+    /// fully refined): the one built over `full`, bit for bit, or `None`
+    /// when that cannot be told from the welded input's (two triangles or
+    /// vertices at one Morton code; a failed build): then it is built anew.
+    fn renumbered<'f>(
+        self,
+        pm: &ProgressiveMesh,
+        full: &'f Mesh,
+    ) -> Option<(Reference<'f>, Duration)> {
+        let inverse = |origin: &[u32]| {
+            let mut new = vec![u32::MAX; origin.len()];
+            for (i, &o) in origin.iter().enumerate() {
+                if let Some(n) = new.get_mut(o as usize) {
+                    *n = i as u32;
+                }
+            }
+            new
+        };
+        let r = self.reference.ok()?.renumbered(
+            MeshRef::new(&full.positions, &full.triangles),
+            &inverse(&pm.vertex_origin),
+            &inverse(&pm.triangle_origin),
+        )?;
+        Some((r, self.took))
+    }
+}
+
 /// QEM runs on wedges (seams and attributes kept); the curvature-adaptive
 /// methods see positions only, and their levels take attributes from the
-/// first input vertex of each position.
-fn simplify(
+/// first input vertex of each position. With `welded` (QEM only), the
+/// original's hierarchy is built on another thread meanwhile, over a copy of
+/// the welded input put there: on a small mesh the simplification leaves
+/// the other core idle most of the time (its walk is sequential), while
+/// the hierarchy built after it was the measurement's first ~10 % of CPU
+/// with one core idle.
+fn simplify<'m>(
     mesh: &SourceMesh,
     flat: &Flat,
     opts: &BuildOptions,
     sopts: &SimplifyOptions,
-) -> Result<Simplified, MeshError> {
-    if opts.method == Method::Qem {
-        let meter = opts.meter.clone();
-        let r = simplify_wedged(mesh, flat, sopts, &opts.attribute_weights, meter);
-        if let Some(m) = &opts.meter {
-            m.set_stage(lodgen_pm::Stage::Idle);
-        }
-        r
-    } else {
-        simplify_adaptive(
+    welded: Option<&'m mut Option<Mesh>>,
+) -> Result<(Simplified, Option<Early<'m>>), MeshError> {
+    if opts.method != Method::Qem {
+        let s = simplify_adaptive(
             &flat.positions,
             &flat.indices,
             opts.method,
             sopts,
             &opts.adaptive,
-        )
+        )?;
+        return Ok((s, None));
     }
+    let meter = opts.meter.clone();
+    let weights = &opts.attribute_weights;
+    let r = match welded {
+        None => simplify_wedged(mesh, flat, sopts, weights, meter).map(|s| (s, None)),
+        Some(slot) => {
+            let build = |welded: &'m Mesh| {
+                let t = Instant::now();
+                let reference = Reference::new(MeshRef::new(&welded.positions, &welded.triangles));
+                Early {
+                    reference,
+                    took: t.elapsed(),
+                }
+            };
+            simplify_wedged_beside(mesh, flat, sopts, weights, meter, slot, build)
+                .map(|(s, e)| (s, Some(e)))
+        }
+    };
+    if let Some(m) = &opts.meter {
+        m.set_stage(lodgen_pm::Stage::Idle);
+    }
+    r
 }
 
 /// A level cut from the sequence: its primitives, and its mesh while it

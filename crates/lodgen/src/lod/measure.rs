@@ -5,9 +5,12 @@
 //! The measurer does not hold the progressive mesh: the builder frees it
 //! once the levels are extracted, before the original's hierarchy is built
 //! (peak memory: at 4.4M triangles the two together were the run's peak).
-//! A small mesh's hierarchy may be built while the levels are extracted
-//! ([`Measurer::prepare`] on another thread), and its levels are measured
-//! side by side ([`Measurer::measure_levels`]): the measurer is `Sync`.
+//! A small mesh's hierarchy is built beside its simplification, over the
+//! welded input, and renumbered (handed in with [`Measurer::set_reference`]),
+//! or while the
+//! levels are extracted ([`Measurer::prepare`] on another thread), and its
+//! levels are measured side by side ([`Measurer::measure_levels`]): the
+//! measurer is `Sync`.
 
 use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
@@ -80,6 +83,15 @@ impl<'a> Measurer<'a> {
             .map_err(|e| measure_err(self.index, self.name, MeasureError::A(e)))?;
         self.add_time(t.elapsed());
         Ok(self.reference.get_or_init(|| r))
+    }
+
+    /// Takes the original's hierarchy built elsewhere (beside the
+    /// simplification, in `took`), over the mesh this measurer was made
+    /// with.
+    pub(super) fn set_reference(&self, r: Reference<'a>, took: Duration) {
+        self.add_time(took);
+        // (a measurer is given at most one, before any measurement)
+        let _ = self.reference.set(r);
     }
 
     /// Builds the original's hierarchy now when the levels are measured

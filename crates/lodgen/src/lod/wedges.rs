@@ -4,7 +4,9 @@
 
 use std::sync::Arc;
 
-use lodgen_pm::{simplify_with_wedges_metered, MeshError, Meter, Simplified, SimplifyOptions};
+use lodgen_pm::{
+    simplify_with_wedges_metered, Mesh, MeshError, Meter, Simplified, SimplifyOptions,
+};
 use rustc_hash::FxHashMap;
 
 use crate::scene::{Primitive, SourceMesh};
@@ -160,16 +162,47 @@ pub(super) fn simplify_wedged(
     weights: &AttributeWeights,
     meter: Option<Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
+    let wedged = wedged_indices(mesh, flat);
+    let (values, dims) = weighted_attributes(mesh, flat, weights);
+    simplify_with_wedges_metered(&flat.positions, &wedged, &values, dims, opts, meter)
+}
+
+/// [`simplify_wedged`], with `beside` run on another thread during the
+/// simplification on a copy of the prepared (welded) mesh, put in `welded`
+/// ([`lodgen_pm::simplify_with_wedges_beside`]).
+pub(super) fn simplify_wedged_beside<'m, R: Send>(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+    meter: Option<Arc<Meter>>,
+    welded: &'m mut Option<Mesh>,
+    beside: impl FnOnce(&'m Mesh) -> R + Send,
+) -> Result<(Simplified, R), MeshError> {
+    let wedged = wedged_indices(mesh, flat);
+    let (values, dims) = weighted_attributes(mesh, flat, weights);
+    lodgen_pm::simplify_with_wedges_beside(
+        &flat.positions,
+        &wedged,
+        &values,
+        dims,
+        opts,
+        meter,
+        welded,
+        beside,
+    )
+}
+
+/// The flat indices with every vertex replaced by its wedge's
+/// representative ([`wedge_of_vertex`]).
+fn wedged_indices<'f>(mesh: &SourceMesh, flat: &'f Flat) -> std::borrow::Cow<'f, [u32]> {
     let wedge = wedge_of_vertex(mesh, flat);
     // every vertex its own wedge (a scan without attributes): the indices
     // as they are, not a copy (peak memory)
     let identity = wedge.iter().enumerate().all(|(v, &w)| w as usize == v);
-    let wedged: std::borrow::Cow<'_, [u32]> = if identity {
+    if identity {
         std::borrow::Cow::Borrowed(&flat.indices)
     } else {
         flat.indices.iter().map(|&i| wedge[i as usize]).collect()
-    };
-    drop(wedge);
-    let (values, dims) = weighted_attributes(mesh, flat, weights);
-    simplify_with_wedges_metered(&flat.positions, &wedged, &values, dims, opts, meter)
+    }
 }
