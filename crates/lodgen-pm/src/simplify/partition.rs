@@ -92,6 +92,10 @@ const BLOCK: usize = 1 << 16;
 /// between batches.
 const BATCH: usize = 16;
 
+/// The whole mesh's quadrics and positions in blocks of `BLOCK` vertices,
+/// each `None` once its last cluster is built.
+type Blocks<'a> = (&'a [Option<Vec<Quadric>>], &'a [Option<Vec<[f32; 3]>>]);
+
 /// A simplified cluster: its numbering and its simplifier after the run.
 struct Local {
     /// Local vertex → global vertex (increasing, so ties between pairs of
@@ -151,13 +155,16 @@ impl Simplifier {
         // first keeps them off the peak of the clusters' construction)
         self.vtris = Fans::default();
         // Memory: the clusters take the triangles and the interior
-        // vertices' quadrics; the whole mesh's are rebuilt from theirs.
+        // vertices' quadrics and positions; the whole mesh's are rebuilt
+        // from theirs.
         let nv = self.pos.len();
-        let held: Vec<(usize, Quadric)> = (0..nv)
+        let held: Vec<(usize, Quadric, [f32; 3])> = (0..nv)
             .filter(|&v| home[v] == HELD)
-            .map(|v| (v, self.quadric[v]))
+            .map(|v| (v, self.quadric[v], self.pos[v]))
             .collect();
         let mut locals = self.clusters(size, &home);
+        // (the write-back tells a cluster's interior by its `held` flags)
+        drop(home);
         self.tri_alive = Vec::new();
         let stop = (KEEP * nt as f64) as usize;
         let mut live = self.live_tris;
@@ -177,36 +184,36 @@ impl Simplifier {
             l.s.pass = Pass::default();
             l.s.mark = Vec::new();
             l.s.locked = Vec::new();
-            l.held = Vec::new();
         }
         // (zeroed pages, mapped as the write-back reaches them while it
         // frees the clusters' copies: the whole mesh's arrays and the
         // clusters' are never resident at once; the held vertices, spread
         // over every page, come last)
         self.quadric = zero_quadrics(nv);
+        self.pos = vec![[0.0; 3]; nv];
         self.tris = vec![[0; 3]; nt];
         self.tri_alive = vec![false; nt];
         let mut done = Vec::with_capacity(locals.len());
-        for (c, l) in locals.into_iter().enumerate() {
-            done.push(self.write_back(l, c as u32, &home));
+        for l in locals {
+            done.push(self.write_back(l));
         }
-        for (v, q) in held {
+        for (v, q, p) in held {
             self.quadric[v] = q;
+            self.pos[v] = p;
         }
-        drop(home);
         self.merge_logs(done);
         let alive = &self.tri_alive;
         self.vtris = Fans::new(nv, &self.tris, |t| alive[t]);
     }
 
     /// The clusters of `size` triangles, built a batch at a time from the
-    /// whole mesh's triangles and quadrics, which they consume: each
-    /// cluster takes its own run of triangles (split off the whole mesh's
-    /// array from its end, so the array shrinks as the pieces are made),
-    /// and a block of quadrics is freed once the last cluster with a
-    /// corner in it is built. So the whole mesh's copies and the
-    /// clusters' are never resident at once (bunny-4m: 196 MB of
-    /// quadrics, 53 MB of triangles).
+    /// whole mesh's triangles, quadrics and positions, which they consume:
+    /// each cluster takes its own run of triangles (split off the whole
+    /// mesh's array from its end, so the array shrinks as the pieces are
+    /// made), and a block of quadrics and positions is freed once the last
+    /// cluster with a corner in it is built. So the whole mesh's copies
+    /// and the clusters' are never resident at once (bunny-4m: 196 MB of
+    /// quadrics, 53 MB of triangles, 27 MB of positions).
     fn clusters(&mut self, size: usize, home: &[u32]) -> Vec<Local> {
         let own = into_pieces(std::mem::take(&mut self.tris), size);
         let nc = own.len();
@@ -222,21 +229,27 @@ impl Simplifier {
                 .into_iter()
                 .map(Some)
                 .collect();
+        let mut poss: Vec<Option<Vec<[f32; 3]>>> =
+            into_pieces(std::mem::take(&mut self.pos), BLOCK)
+                .into_iter()
+                .map(Some)
+                .collect();
         let mut own = own.into_iter();
         let mut locals: Vec<Local> = Vec::with_capacity(nc);
         while locals.len() < nc {
             let first = locals.len();
             let batch: Vec<Vec<[u32; 3]>> = own.by_ref().take(BATCH).collect();
-            let (this, q) = (&*self, &quads);
+            let (this, blocks) = (&*self, (&quads[..], &poss[..]));
             locals.par_extend(
                 batch
                     .into_par_iter()
                     .enumerate()
-                    .map(|(i, tris)| this.cluster((first + i) as u32, size, tris, home, q)),
+                    .map(|(i, tris)| this.cluster((first + i) as u32, size, tris, home, blocks)),
             );
-            for (b, block) in quads.iter_mut().enumerate() {
+            for (b, (q, p)) in quads.iter_mut().zip(&mut poss).enumerate() {
                 if last[b] < locals.len() {
-                    *block = None;
+                    *q = None;
+                    *p = None;
                 }
             }
         }
@@ -258,14 +271,14 @@ impl Simplifier {
     }
 
     /// Cluster `c` (triangles `c·size..`, `own`) as a simplifier of its
-    /// own, its quadrics read from the blocks `quads`.
+    /// own, its quadrics and positions read from the blocks `blocks`.
     fn cluster(
         &self,
         c: u32,
         size: usize,
         mut own: Vec<[u32; 3]>,
         home: &[u32],
-        quads: &[Option<Vec<Quadric>>],
+        blocks: Blocks<'_>,
     ) -> Local {
         let start = c as usize * size;
         let mut verts: Vec<u32> = own.iter().flatten().copied().collect();
@@ -276,7 +289,7 @@ impl Simplifier {
             *t = t.map(local);
         }
         let held: Vec<bool> = verts.iter().map(|&g| home[g as usize] != c).collect();
-        let s = self.local(&verts, own, &held, quads);
+        let s = self.local(&verts, own, &held, blocks);
         Local {
             verts,
             start: start as u32,
@@ -287,14 +300,14 @@ impl Simplifier {
     }
 
     /// A simplifier over the vertices `verts` (global ids) and `tris`
-    /// (local ids) with this one's flags and the quadrics of `quads`
-    /// (blocks of `BLOCK` vertices), the `held` ones locked.
+    /// (local ids) with this one's flags and the quadrics and positions of
+    /// `blocks` (of `BLOCK` vertices), the `held` ones locked.
     fn local(
         &self,
         verts: &[u32],
         tris: Vec<[u32; 3]>,
         held: &[bool],
-        quads: &[Option<Vec<Quadric>>],
+        (quads, poss): Blocks<'_>,
     ) -> Simplifier {
         let nv = verts.len();
         let nt = tris.len();
@@ -303,11 +316,15 @@ impl Simplifier {
             let block = quads[get(g) / BLOCK].as_ref();
             block.expect("a block of quadrics outlives its last cluster")[get(g) % BLOCK]
         };
+        let position = |g: &u32| {
+            let block = poss[get(g) / BLOCK].as_ref();
+            block.expect("a block of positions outlives its last cluster")[get(g) % BLOCK]
+        };
         let vtris = Fans::new(nv, &tris, |_| true);
         Simplifier {
             opts: self.opts,
             target: 0,
-            pos: verts.iter().map(|g| self.pos[get(g)]).collect(),
+            pos: verts.iter().map(position).collect(),
             quadric: verts.iter().map(quadric).collect(),
             tris,
             tri_alive: vec![true; nt],
@@ -345,19 +362,19 @@ impl Simplifier {
         }
     }
 
-    /// Write cluster `c`'s state back: its interior vertices and its own
+    /// Write a cluster's state back: its interior vertices and its own
     /// triangles as they are now.
-    fn write_back(&mut self, l: Local, c: u32, home: &[u32]) -> Done {
+    fn write_back(&mut self, l: Local) -> Done {
         let Local {
             verts,
             start,
+            held,
             rounds,
             s,
-            ..
         } = l;
         for (i, &g) in verts.iter().enumerate() {
             let g = g as usize;
-            if home[g] == c {
+            if !held[i] {
                 self.pos[g] = s.pos[i];
                 self.quadric[g] = s.quadric[i];
                 self.alive[g] = s.alive[i];

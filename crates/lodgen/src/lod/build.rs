@@ -20,7 +20,7 @@ use super::flat::{flatten, Flat};
 use super::measure::Measurer;
 use super::options::{BuildOptions, LevelRequest, Progress};
 use super::select::select_splits;
-use super::wedges::{simplify_wedged, simplify_wedged_beside};
+use super::wedges::{prepare_wedged, simplify_wedged, simplify_wedged_beside};
 
 /// What happened to one mesh, beside its [`LodMesh`].
 #[derive(Clone, Debug)]
@@ -185,6 +185,64 @@ fn return_freed_memory(input_triangles: usize) {
     }
 }
 
+/// Whether `mesh`'s input positions and indices can be freed once the
+/// simplification is prepared, before it runs (peak memory: a scan's
+/// parsed input, 18 bytes per triangle, beside the simplifier's state):
+/// an `owned` mesh (its input is the caller's to free) of one primitive with
+/// positions only (nothing after the
+/// preparation reads its geometry: no attribute to transfer or fit),
+/// simplified by QEM, unless [`BuildOptions::keep_input`] or
+/// [`BuildOptions::keep_progressive`]. Such a mesh's levels are turned into
+/// primitives only once measured ([`deferred_primitives`]), from their
+/// meshes, so that the extracted primitives do not wait beside the
+/// measurement (nor the preparation's maps beside the run). The later steps
+/// cannot fail on the original (it passed the preparation's checks); if
+/// a level fails its measurement the mesh is written as its welded input
+/// ([`restore_input`]).
+fn frees_input_early(owned: bool, mesh: &SourceMesh, opts: &BuildOptions) -> bool {
+    let [p] = mesh.primitives.as_slice() else {
+        return false;
+    };
+    let positions_only = p.normals.is_none()
+        && p.texcoords.is_none()
+        && p.tangents.is_none()
+        && p.extra_texcoords.is_empty()
+        && p.colors.is_none()
+        && p.joints.is_none()
+        && p.weights.is_none()
+        && p.extra_colors.is_empty()
+        && p.extra_joints.is_empty()
+        && p.extra_weights.is_empty()
+        && p.targets.is_empty();
+    owned
+        && !opts.keep_input
+        && !opts.keep_progressive
+        && opts.method == Method::Qem
+        && positions_only
+}
+
+/// Frees an owned mesh's input positions and indices.
+fn free_input(mesh: &mut Cow<'_, SourceMesh>) {
+    if let Cow::Owned(m) = mesh {
+        for p in &mut m.primitives {
+            p.positions = Vec::new();
+            p.indices = Vec::new();
+        }
+    }
+}
+
+/// A mesh freed by [`frees_input_early`] given its welded input `full`
+/// back as its geometry (what a mesh written unsimplified then shows: the
+/// input's surface, welded and cleaned).
+fn restore_input(mesh: &mut Cow<'_, SourceMesh>, full: &Mesh) {
+    if let Cow::Owned(m) = mesh {
+        if let [p] = m.primitives.as_mut_slice() {
+            p.positions = full.positions.clone();
+            p.indices = full.triangles.iter().flatten().copied().collect();
+        }
+    }
+}
+
 /// Below this many input triangles a mesh's original hierarchy is built
 /// while its levels are extracted, and its levels are measured side by side
 /// (both cores busy where one would wait: the bunny's measure phase). Larger
@@ -202,14 +260,13 @@ fn build_mesh(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<MeshBuild, BuildError> {
     let name = mesh.name.clone();
-    let flat = flatten(mesh);
-    let input_triangles = flat.indices.len() / 3;
+    let input_triangles = mesh.primitives.iter().map(Primitive::triangle_count).sum();
     let mesh_err = |source| BuildError::Mesh {
         index,
         name: name.clone(),
         source,
     };
-    let sopts = simplify_options(opts, flat.indices.len() / 3)?;
+    let sopts = simplify_options(opts, input_triangles)?;
     let side_by_side = input_triangles < SIDE_BY_SIDE_MAX_TRIANGLES;
     // (a level will be measured: the target is below the input)
     let early = side_by_side
@@ -218,12 +275,35 @@ fn build_mesh(
         && sopts.target_triangles.is_none_or(|t| t < input_triangles);
     let t_build = Instant::now();
     let mut welded = None;
-    let (mut simplified, early) =
-        simplify(mesh, &flat, opts, &sopts, early.then_some(&mut welded)).map_err(mesh_err)?;
+    let freed = !early && frees_input_early(matches!(mesh, Cow::Owned(_)), mesh, opts);
+    let (mut simplified, early, flat) = if freed {
+        let (simplified, flat) = simplify_freeing(mesh, opts, &sopts).map_err(mesh_err)?;
+        (simplified, None, flat)
+    } else {
+        let flat = flatten(mesh);
+        let (simplified, early) =
+            simplify(mesh, &flat, opts, &sopts, early.then_some(&mut welded)).map_err(mesh_err)?;
+        (simplified, early, flat)
+    };
     let simplify_time = t_build.elapsed();
     return_freed_memory(input_triangles);
     let pm = &simplified.pm;
     let full = pm.mesh_at_splits(pm.len());
+    // (a mesh whose input was freed and whose levels then fail is written
+    // as its welded input: the input is rebuilt from `full`)
+    macro_rules! or_restore {
+        ($e:expr) => {
+            match $e {
+                Ok(x) => x,
+                Err(e) => {
+                    if freed {
+                        restore_input(mesh, &full);
+                    }
+                    return Err(e);
+                }
+            }
+        };
+    }
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
     if let Some((r, took)) = early.and_then(|e| e.renumbered(pm, &full)) {
         measurer.set_reference(r, took);
@@ -236,32 +316,16 @@ fn build_mesh(
             of,
         })
     };
-    let (splits, notes) = select_splits(pm, opts, &measurer, &mut measuring)?;
-    let extracted = if let Some(popts) = &opts.polish {
-        // (the polish needs the original's hierarchy first)
-        let polish = Polish {
-            measurer: &measurer,
-            opts: popts,
-        };
-        extract_levels(
-            mesh,
-            &flat,
-            &simplified,
-            &splits,
-            opts.measured,
-            Some(polish),
-        )?
-    } else if side_by_side {
-        // (the original's hierarchy built on the other core meanwhile)
-        let (extracted, prepared) = rayon::join(
-            || extract_levels(mesh, &flat, &simplified, &splits, opts.measured, None),
-            || measurer.prepare(),
-        );
-        prepared?;
-        extracted?
-    } else {
-        extract_levels(mesh, &flat, &simplified, &splits, opts.measured, None)?
-    };
+    let (splits, notes) = or_restore!(select_splits(pm, opts, &measurer, &mut measuring));
+    let extracted = or_restore!(extract_all(
+        mesh,
+        &flat,
+        &simplified,
+        &splits,
+        opts,
+        &measurer,
+        (side_by_side, freed)
+    ));
     drop(flat);
     if let (false, Cow::Owned(m)) = (opts.keep_input, &mut *mesh) {
         if measurable(&full, &extracted) {
@@ -278,7 +342,7 @@ fn build_mesh(
         simplified.vertex_map = Vec::new();
         simplified.triangle_map = Vec::new();
     }
-    let (lod_levels, errors) = measure_levels(
+    let (lod_levels, errors) = or_restore!(measure_levels(
         extracted,
         &full,
         &splits,
@@ -286,7 +350,7 @@ fn build_mesh(
         &measurer,
         side_by_side,
         &mut measuring,
-    )?;
+    ));
     let measure_time = measurer.time();
     drop(measurer);
     Ok(MeshBuild {
@@ -307,6 +371,71 @@ fn build_mesh(
         },
         notes,
     })
+}
+
+/// Every level extracted ([`extract_levels`]): polished first with
+/// [`BuildOptions::polish`]; below [`SIDE_BY_SIDE_MAX_TRIANGLES`]
+/// (`side_by_side`) while the original's hierarchy is built on the other
+/// core; `freed`: the input was freed ([`frees_input_early`]).
+fn extract_all(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    simplified: &Simplified,
+    splits: &[usize],
+    opts: &BuildOptions,
+    measurer: &Measurer<'_>,
+    (side_by_side, freed): (bool, bool),
+) -> Result<Vec<Extracted>, BuildError> {
+    let extracted = if let Some(popts) = &opts.polish {
+        // (the polish needs the original's hierarchy first)
+        let polish = Polish {
+            measurer,
+            opts: popts,
+        };
+        extract_levels(
+            mesh,
+            flat,
+            simplified,
+            splits,
+            (opts.measured, freed),
+            Some(polish),
+        )?
+    } else if side_by_side {
+        // (the original's hierarchy built on the other core meanwhile)
+        let (extracted, prepared) = rayon::join(
+            || {
+                let what = (opts.measured, freed);
+                extract_levels(mesh, flat, simplified, splits, what, None)
+            },
+            || measurer.prepare(),
+        );
+        prepared?;
+        extracted?
+    } else {
+        extract_levels(mesh, flat, simplified, splits, (opts.measured, freed), None)?
+    };
+    Ok(extracted)
+}
+
+/// The simplification of a mesh whose input is freed once it is prepared
+/// ([`frees_input_early`]), and its flattening without geometry.
+fn simplify_freeing(
+    mesh: &mut Cow<'_, SourceMesh>,
+    opts: &BuildOptions,
+    sopts: &SimplifyOptions,
+) -> Result<(Simplified, Flat<'static>), MeshError> {
+    let flat = flatten(mesh);
+    let meter = opts.meter.clone();
+    let ready = prepare_wedged(mesh, &flat, sopts, &opts.attribute_weights, meter)?;
+    let flat = flat.without_geometry();
+    free_input(mesh);
+    // (nothing reads the maps: the levels' primitives come from their
+    // meshes, `deferred_primitives`)
+    let simplified = ready.without_maps().run();
+    if let Some(m) = &opts.meter {
+        m.set_stage(lodgen_pm::Stage::Idle);
+    }
+    Ok((simplified, flat))
 }
 
 /// `opts.simplify` with the triangle target the requested levels need.
@@ -424,19 +553,25 @@ fn simplify<'m>(
 struct Extracted {
     primitives: Vec<Primitive>,
     /// `None` when the level is not measured: no measurement, or the
-    /// level is the original (its error is 0).
+    /// level is the original (its error is 0); kept for a level below the
+    /// input when `deferred`.
     mesh: Option<Mesh>,
+    /// `Some(material)`: the primitives are made from the mesh once it is
+    /// measured ([`deferred_primitives`]; `primitives` is empty until then).
+    deferred: Option<Option<usize>>,
 }
 
 /// Every level at `splits`: attributes fitted below the input (module
 /// docs), extracted into primitives; its mesh kept when `measured` and the
-/// level is below the input.
+/// level is below the input. With `deferred` (a mesh of one positions-only
+/// primitive whose input was freed, [`frees_input_early`]) only the meshes
+/// are kept, the primitives made after their measurement.
 fn extract_levels(
     mesh: &SourceMesh,
     flat: &Flat,
     simplified: &Simplified,
     splits: &[usize],
-    measured: bool,
+    (measured, deferred): (bool, bool),
     polish: Option<Polish<'_, '_>>,
 ) -> Result<Vec<Extracted>, BuildError> {
     let pm = &simplified.pm;
@@ -452,6 +587,15 @@ fn extract_levels(
             p.measurer.polish(&mut polished, p.opts)?;
             m = &polished;
         }
+        if deferred {
+            let material = mesh.primitives.first().and_then(|p| p.material);
+            out.push(Extracted {
+                primitives: Vec::new(),
+                mesh: (k < pm.len()).then(|| m.clone()),
+                deferred: Some(material),
+            });
+            continue;
+        }
         // a level below the input gets fitted values (module docs)
         let fitted = match (&fit_source, cursor.wedges()) {
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
@@ -460,9 +604,37 @@ fn extract_levels(
         out.push(Extracted {
             primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
             mesh: (measured && k < pm.len()).then(|| m.clone()),
+            deferred: None,
         });
     }
     Ok(out)
+}
+
+/// The one primitive of a level of a mesh of one positions-only primitive
+/// ([`frees_input_early`]): what [`extract`] makes of it (every level
+/// vertex one output vertex, numbered in order of first use by the
+/// triangles; no primitive without triangles), from the level's mesh alone.
+fn deferred_primitives(material: Option<usize>, level: &Mesh) -> Vec<Primitive> {
+    if level.triangles.is_empty() {
+        return Vec::new();
+    }
+    let mut out_of = vec![u32::MAX; level.positions.len()];
+    let mut positions = Vec::new();
+    let mut indices = Vec::with_capacity(3 * level.triangles.len());
+    for &v in level.triangles.iter().flatten() {
+        let o = &mut out_of[v as usize];
+        if *o == u32::MAX {
+            *o = positions.len() as u32;
+            positions.push(level.positions[v as usize]);
+        }
+        indices.push(*o);
+    }
+    vec![Primitive {
+        material,
+        positions,
+        indices,
+        ..Primitive::default()
+    }]
 }
 
 /// The polish of the written levels ([`BuildOptions::polish`]): the
@@ -515,9 +687,13 @@ fn measure_levels(
                 measurer.measure(level.mesh.as_ref().unwrap_or(full), k, mopts)?
             }
         };
+        let primitives = match level.deferred {
+            Some(material) => deferred_primitives(material, level.mesh.as_ref().unwrap_or(full)),
+            None => level.primitives,
+        };
         drop(level.mesh);
         lod_levels.push(LodLevel {
-            primitives: level.primitives,
+            primitives,
             hausdorff: report.hausdorff() / diagonal.max(f64::MIN_POSITIVE),
             rms: report.rms() / diagonal.max(f64::MIN_POSITIVE),
             screen_coverage: 0.0,

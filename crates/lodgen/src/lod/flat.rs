@@ -22,6 +22,18 @@ impl Flat<'_> {
     pub(super) fn prim_of_triangle(&self, t: usize) -> u32 {
         self.prim_of_triangle.get(t).copied().unwrap_or(0)
     }
+
+    /// The same flattening without its positions and indices (the
+    /// primitives and vertex offsets extraction reads), borrowing nothing:
+    /// the input's geometry can then be freed.
+    pub(super) fn without_geometry(self) -> Flat<'static> {
+        Flat {
+            positions: Cow::Owned(Vec::new()),
+            indices: Cow::Owned(Vec::new()),
+            prim_of_triangle: self.prim_of_triangle,
+            vertex_offset: self.vertex_offset,
+        }
+    }
 }
 
 pub(super) fn flatten(mesh: &SourceMesh) -> Flat<'_> {

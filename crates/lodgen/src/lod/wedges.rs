@@ -5,7 +5,8 @@
 use std::sync::Arc;
 
 use lodgen_pm::{
-    simplify_with_wedges_metered, Mesh, MeshError, Meter, Simplified, SimplifyOptions,
+    prepare_with_wedges, simplify_with_wedges_metered, Mesh, MeshError, Meter, Ready, Simplified,
+    SimplifyOptions,
 };
 use rustc_hash::FxHashMap;
 
@@ -165,6 +166,20 @@ pub(super) fn simplify_wedged(
     let wedged = wedged_indices(mesh, flat);
     let (values, dims) = weighted_attributes(mesh, flat, weights);
     simplify_with_wedges_metered(&flat.positions, &wedged, &values, dims, opts, meter)
+}
+
+/// [`simplify_wedged`] up to the run: the simplification [`Ready`] to run,
+/// which no longer reads `mesh` or `flat`.
+pub(super) fn prepare_wedged(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    opts: &SimplifyOptions,
+    weights: &AttributeWeights,
+    meter: Option<Arc<Meter>>,
+) -> Result<Ready, MeshError> {
+    let wedged = wedged_indices(mesh, flat);
+    let (values, dims) = weighted_attributes(mesh, flat, weights);
+    prepare_with_wedges(&flat.positions, &wedged, &values, dims, opts, meter)
 }
 
 /// [`simplify_wedged`], with `beside` run on another thread during the
