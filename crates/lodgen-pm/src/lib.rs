@@ -57,8 +57,8 @@ pub use progressive::{
 };
 pub use simplify::{
     Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
-    SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, DEFAULT_BOUNDARY_WEIGHT,
-    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
+    SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, TopologyChange,
+    DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
 };
 
 /// A simplification's result: the progressive mesh (numbered as in
@@ -81,8 +81,38 @@ pub struct Simplified {
     pub stop: StopReason,
 }
 
-/// Prepare (validate, weld, clean) and simplify an indexed triangle list.
+/// Prepare (validate, weld, clean) and simplify an indexed triangle list
+/// (with [`TopologyChange::WhenShort`], twice when the topology stopped the
+/// first run above its target).
 pub fn simplify(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    opts: &SimplifyOptions,
+) -> Result<Simplified, MeshError> {
+    let out = simplify_once(positions, indices, opts)?;
+    if !short_on_topology(opts, &out) {
+        return Ok(out);
+    }
+    drop(out);
+    simplify_once(positions, indices, &again(opts))
+}
+
+/// Whether [`TopologyChange::WhenShort`] runs again: the run stopped above
+/// its target, and the topology rules that [`TopologyChange::Joins`]
+/// relaxes refused candidates.
+fn short_on_topology(opts: &SimplifyOptions, out: &Simplified) -> bool {
+    let r = &out.stats.rejected;
+    opts.topology_change == TopologyChange::WhenShort
+        && out.stop == StopReason::Exhausted
+        && r.link + r.boundary_pinch + r.duplicate > 0
+}
+
+/// The options of [`TopologyChange::WhenShort`]'s second run.
+fn again(opts: &SimplifyOptions) -> SimplifyOptions {
+    (*opts).with_topology_change(TopologyChange::Joins)
+}
+
+fn simplify_once(
     positions: &[[f32; 3]],
     indices: &[u32],
     opts: &SimplifyOptions,
@@ -126,7 +156,8 @@ pub fn simplify_with_wedges(
 
 /// [`simplify_with_wedges`], reporting its stage and the share of the
 /// target reached to `meter` (read it from another thread for a progress
-/// display; [`Meter`]).
+/// display; [`Meter`]; a second run of [`TopologyChange::WhenShort`]
+/// reports from the start again).
 pub fn simplify_with_wedges_metered(
     positions: &[[f32; 3]],
     indices: &[u32],
@@ -135,7 +166,9 @@ pub fn simplify_with_wedges_metered(
     opts: &SimplifyOptions,
     meter: Option<std::sync::Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
-    Ok(prepare_with_wedges(positions, indices, attributes, dims, opts, meter)?.run())
+    check_attributes(positions, attributes, dims, meter.as_deref())?;
+    let prepared = prepare(positions, indices)?;
+    run_again(prepared, positions, indices, attributes, dims, opts, meter)
 }
 
 /// [`simplify_with_wedges_metered`] in two steps: this one prepares (weld,
@@ -143,7 +176,10 @@ pub fn simplify_with_wedges_metered(
 /// over) and returns the simplification [`Ready`] to run, which no longer
 /// reads `positions`, `indices` or `attributes`: a caller may free them
 /// before [`Ready::run`] (peak memory: a scan's parsed input is 18 bytes
-/// per triangle).
+/// per triangle). So [`Ready::run`] runs once: with
+/// [`TopologyChange::WhenShort`] a run the topology stops above its target
+/// stays there (as with [`TopologyChange::Never`]); the caller may run
+/// again with [`TopologyChange::Joins`] while it has the input.
 pub fn prepare_with_wedges(
     positions: &[[f32; 3]],
     indices: &[u32],
@@ -180,7 +216,7 @@ pub fn simplify_with_wedges_beside<'m, R: Send>(
     let prepared = prepare(positions, indices)?;
     let copy: &'m Mesh = welded.insert(prepared.mesh.clone());
     let (simplified, r) = rayon::join(
-        || Ok(ready(prepared, indices, attributes, dims, opts, meter)?.run()),
+        || run_again(prepared, positions, indices, attributes, dims, opts, meter),
         || beside(copy),
     );
     Ok((simplified?, r))
@@ -205,6 +241,27 @@ fn check_attributes(
         });
     }
     Ok(())
+}
+
+/// [`ready`] and run, and with [`TopologyChange::WhenShort`] again from
+/// the input (prepared again) when the topology stopped it above its
+/// target.
+fn run_again(
+    prepared: Prepared,
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    attributes: &[f32],
+    dims: usize,
+    opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
+) -> Result<Simplified, MeshError> {
+    let out = ready(prepared, indices, attributes, dims, opts, meter.clone())?.run();
+    if !short_on_topology(opts, &out) {
+        return Ok(out);
+    }
+    drop(out);
+    let prepared = prepare(positions, indices)?;
+    Ok(ready(prepared, indices, attributes, dims, &again(opts), meter)?.run())
 }
 
 /// The simplification of the wedged entry points, from the prepared mesh,

@@ -4,11 +4,12 @@
 //! levels), face counts never rise while simplifying, the grid pair finder
 //! equals brute force, and replay is exact.
 
+use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
 use lodgen_pm::shapes::{grid, icosphere, torus};
 use lodgen_pm::simplify::FLIP_MIN_COS;
 use lodgen_pm::{
     prepare, simplify, Mesh, ProgressiveMesh, Schedule, Simplifier, SimplifyOptions, StopReason,
-    Tau,
+    Tau, TopologyChange,
 };
 use proptest::prelude::*;
 
@@ -159,7 +160,12 @@ proptest! {
     fn random_meshes_simplify_cleanly(kind in 0u8..3, seed in any::<u64>(), ratio in 0.0f64..0.9, greedy in any::<bool>()) {
         let m = random_mesh(kind, seed);
         let welded = prepare(&m.positions, &m.indices()).unwrap();
+        // (the rules held: the default may change the topology of a run
+        // they stop, which then replays exactly too)
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio).with_schedule(schedule(greedy));
+        let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
+        prop_assert_eq!(out.pm.full_in_input_order(), welded.mesh.clone());
+        let opts = opts.with_topology_change(TopologyChange::Never);
         let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
         check_levels(&out.pm, true);
         prop_assert_eq!(out.pm.full_in_input_order(), welded.mesh);
@@ -452,9 +458,11 @@ fn beetle_contracts_along_its_edges_of_three_faces_and_replays_exactly() {
     let chain = common::edges_of_three_faces(&m).len();
     assert_eq!(chain, 47);
     for greedy in [false, true] {
+        // (every rule held: the default runs again changing the topology)
         let opts = SimplifyOptions::DEFAULT
             .with_target_ratio(0.02)
-            .with_schedule(schedule(greedy));
+            .with_schedule(schedule(greedy))
+            .with_topology_change(TopologyChange::Never);
         let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
         let wide = out.pm.splits.iter().filter(|s| s.faces.len() >= 3).count();
         let left = common::edges_of_three_faces(&out.pm.base).len();
@@ -470,9 +478,9 @@ fn beetle_contracts_along_its_edges_of_three_faces_and_replays_exactly() {
     }
 }
 
-/// [`SimplifyOptions::allow_topology_change`] on a mesh whose topology
-/// stops it: the run reaches its target (without the option it stops
-/// above it, `Exhausted`), the contractions the option allowed are
+/// [`TopologyChange::All`] on a mesh whose topology stops it: the run
+/// reaches its target (with [`TopologyChange::Never`] it stops above it,
+/// `Exhausted`), the contractions the option allowed are
 /// counted, replay gives the input back, every level is the simplifier's
 /// own state (the log's levels against its snapshots) and `run` equals
 /// stepping. Fails if the option relaxes nothing (the stop stays
@@ -480,7 +488,8 @@ fn beetle_contracts_along_its_edges_of_three_faces_and_replays_exactly() {
 fn check_topology_change(m: &Mesh, target: usize, greedy: bool) {
     let strict = SimplifyOptions::DEFAULT
         .with_target_triangles(target)
-        .with_schedule(schedule(greedy));
+        .with_schedule(schedule(greedy))
+        .with_topology_change(TopologyChange::Never);
     let out = simplify(&m.positions, &m.indices(), &strict).unwrap();
     assert_eq!(out.stop, StopReason::Exhausted, "greedy {greedy}");
     assert!(out.pm.base.triangles.len() > target);
@@ -525,4 +534,57 @@ fn allow_topology_change_reaches_the_target_where_the_topology_stopped_the_run()
     let out = simplify(&m.positions, &m.indices(), &opts).unwrap();
     assert_eq!(out.stop, StopReason::Target);
     assert!(out.stats.relaxed.total() > 0);
+}
+
+/// The default, [`TopologyChange::WhenShort`]: a run the topology stops
+/// above its target runs again with [`TopologyChange::Joins`] (the same
+/// output, which reaches the target with joins and flattening only), and
+/// beetle's 2 % level (41 triangles) is then closer to the original than
+/// the level [`TopologyChange::Never`] stops at, with fewer triangles (the
+/// bound: that run's own error); a run that reaches its target is the
+/// one [`TopologyChange::Never`] makes. Fails when the default does not
+/// run again (it stops `Exhausted`) or runs again with other rules.
+#[test]
+fn the_default_changes_the_topology_only_when_it_stops_the_run() {
+    let s = icosphere(1);
+    let sphere = prepare(&s.positions, &s.indices()).unwrap().mesh;
+    let beetle = common::shared_mesh("beetle.obj");
+    let mut cases = vec![(&sphere, 2)];
+    cases.extend(beetle.as_ref().map(|m| (m, 41)));
+    for (m, target) in cases {
+        for greedy in [false, true] {
+            let run = |t: TopologyChange| {
+                let opts = SimplifyOptions::DEFAULT
+                    .with_target_triangles(target)
+                    .with_schedule(schedule(greedy))
+                    .with_topology_change(t);
+                simplify(&m.positions, &m.indices(), &opts).unwrap()
+            };
+            let (default, joins) = (run(TopologyChange::WhenShort), run(TopologyChange::Joins));
+            assert_eq!(default.stop, StopReason::Target, "greedy {greedy}");
+            assert_eq!(default.pm, joins.pm, "greedy {greedy}");
+            let r = &default.stats.relaxed;
+            assert!(r.total() > 0 && r.feature + r.flip + r.degenerate == 0);
+            let never = run(TopologyChange::Never);
+            assert_eq!(never.stop, StopReason::Exhausted);
+            if target == 41 && !greedy {
+                let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles)).unwrap();
+                let error = |pm: &ProgressiveMesh| {
+                    let b = &pm.base;
+                    let mopts = MeasureOptions::DEFAULT.with_seed(1);
+                    let e = reference.measure(MeshRef::new(&b.positions, &b.triangles), &mopts);
+                    let e = e.unwrap();
+                    (b.triangles.len(), e.hausdorff(), e.rms())
+                };
+                let (a, b) = (error(&default.pm), error(&never.pm));
+                assert!(a.0 < b.0 && a.1 < b.1 && a.2 < b.2, "{a:?} against {b:?}");
+            }
+        }
+    }
+    // a run that reaches its target: the same output as keeping the topology
+    let opts = SimplifyOptions::DEFAULT.with_target_triangles(20);
+    let a = simplify(&sphere.positions, &sphere.indices(), &opts).unwrap();
+    let never = opts.with_topology_change(TopologyChange::Never);
+    let b = simplify(&sphere.positions, &sphere.indices(), &never).unwrap();
+    assert_eq!((a.stop, &a.pm), (StopReason::Target, &b.pm));
 }

@@ -6,7 +6,7 @@ mod common;
 use lodgen_pm::shapes::{cube, grid, icosphere, tetrahedron, torus};
 use lodgen_pm::{
     prepare, simplify, Boundary, Mesh, Placement, Schedule, Simplifier, SimplifyOptions,
-    StopReason, Tau,
+    StopReason, Tau, TopologyChange,
 };
 
 /// Both contraction orders: every hand-built expectation holds for each.
@@ -57,7 +57,8 @@ fn tetrahedron_does_not_go_below_four_faces() {
             &tetrahedron(),
             SimplifyOptions::DEFAULT
                 .with_schedule(schedule)
-                .with_target_triangles(0),
+                .with_target_triangles(0)
+                .with_topology_change(TopologyChange::Never),
         );
         assert_eq!(out.pm.base.triangles.len(), 4);
         assert_eq!(out.stop, StopReason::Exhausted);
@@ -72,7 +73,8 @@ fn octahedron_like_sphere_does_not_become_a_sheet() {
             &icosphere(1),
             SimplifyOptions::DEFAULT
                 .with_schedule(schedule)
-                .with_target_triangles(0),
+                .with_target_triangles(0)
+                .with_topology_change(TopologyChange::Never),
         );
         let base = &out.pm.base;
         assert!(base.triangles.len() >= 4, "{} faces", base.triangles.len());

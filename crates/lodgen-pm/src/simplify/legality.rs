@@ -47,7 +47,7 @@ pub enum Rejected {
     Feature,
 }
 
-/// How far [`crate::SimplifyOptions::allow_topology_change`] has relaxed
+/// How far [`crate::SimplifyOptions::topology_change`] has relaxed
 /// the rules of a run that found no legal contraction: each stage lets one
 /// more kind of refusal pass, and those of the stages before it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]

@@ -52,7 +52,7 @@ mod walk;
 pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 pub use meter::{Meter, Stage};
 pub use options::{
-    Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT,
+    Boundary, Placement, Schedule, SimplifyOptions, Tau, TopologyChange, DEFAULT_BOUNDARY_WEIGHT,
     DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
 };
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
@@ -168,7 +168,7 @@ struct Plan {
     /// [`Simplifier::hole_cost`] of the contraction (0: it closes no hole).
     hole: f64,
     /// The rule the contraction breaks, which the relaxation stage lets
-    /// pass ([`SimplifyOptions::allow_topology_change`]; `None`: none).
+    /// pass ([`SimplifyOptions::topology_change`]; `None`: none).
     broke: Option<Rejected>,
 }
 
@@ -210,13 +210,13 @@ struct Pass {
     spread_limit: f64,
     /// Candidates skipped by `spread_limit` in this pass.
     deferred: usize,
-    /// The rules this pass relaxes ([`SimplifyOptions::allow_topology_change`]:
+    /// The rules this pass relaxes ([`SimplifyOptions::topology_change`]:
     /// raised a stage each time the run is stuck; back to none after a
     /// pass that made a contraction).
     relax: legality::Relax,
     /// Candidates of this pass the topology rules refused (or that broke
     /// one, relaxed): the next pass relaxes them when they outnumber its
-    /// contractions by `RELAX_SHARE` ([`SimplifyOptions::allow_topology_change`]).
+    /// contractions by `RELAX_SHARE` ([`SimplifyOptions::topology_change`]).
     refused: usize,
 }
 

@@ -27,6 +27,52 @@ pub enum Placement {
     HalfEdge,
 }
 
+/// What a run may do to the surface's topology to reach its target
+/// ([`SimplifyOptions::topology_change`]). The topology rules refuse joins
+/// that make the surface non-manifold (the link condition, two borders
+/// pinched together, two edges of three faces fused), closed parts
+/// flattened into double-sided sheets (duplicate faces), feature vertices
+/// (seams, hard edges, material borders) leaving their lines, and faces
+/// turning over or collapsing to slivers. A mesh whose topology holds its
+/// triangles (beetle.obj: 47 edges of three faces, 23 border loops) runs out
+/// of legal contractions above its target, or reaches it only through
+/// contractions that the rules force to be costly (docs/quality.md,
+/// "Reaching the count"). Relaxed contractions are vertex splits of the log
+/// like any other (replay stays exact); `Stats::relaxed` counts them by the
+/// rule they broke. Locked vertices ([`Boundary::Locked`]) stay locked and
+/// `max_error` still binds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TopologyChange {
+    /// Every rule holds: a mesh whose topology holds its triangles stops
+    /// above its target ([`crate::StopReason::Exhausted`]).
+    Never,
+    /// The default: every rule holds, and when that stops the run above its
+    /// target on refusals [`TopologyChange::Joins`] relaxes, `simplify` and
+    /// `simplify_with_wedges` run it again from the start with
+    /// [`TopologyChange::Joins`]. A mesh that reaches its target keeps its
+    /// topology and the same output as with [`TopologyChange::Never`]; one
+    /// that does not costs a second run. (`Simplifier` alone runs
+    /// it as [`TopologyChange::Never`].) Measured on beetle.obj, positions
+    /// only (`target/release/xtask quality --quick`): the run stopped at 92
+    /// triangles for its 2 % level (41), Hausdorff 16.81 % / RMS 4.02 % of
+    /// the diagonal; run again it reaches 40 at 6.05 / 1.72 %, and its 10 %
+    /// level goes from 2.50 / 0.461 to 2.34 / 0.337 %.
+    WhenShort,
+    /// Joins and flattening allowed: with [`Schedule::Passes`], a pass
+    /// whose candidates the topology rules held (refused more than a
+    /// quarter as many as it contracted) is followed by one that lets joins
+    /// and flattening pass, so the topology changes where that is cheapest
+    /// instead of after costly forced contractions; a run stuck before its
+    /// target lets joins, then flattening pass (in cost order, back to
+    /// every rule after a pass that made a contraction).
+    Joins,
+    /// [`TopologyChange::Joins`], and a run still stuck lets feature
+    /// vertices leave their lines, then faces turn over or collapse,
+    /// one kind more each time it is stuck again; at least one face stays
+    /// (`lodgen --allow-topology-change`).
+    All,
+}
+
 /// In which order contractions are made.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Schedule {
@@ -131,28 +177,9 @@ pub struct SimplifyOptions {
     /// the bunny (the reach test of every planned pair; +2–5 % of a whole
     /// CLI run's CPU with measurement; docs/performance.md).
     pub reach: Option<f64>,
-    /// When no contraction that keeps the topology is left before the
-    /// target, go on with the refused kinds allowed, one kind more each
-    /// time the run is stuck again, in this order: joins that make the
-    /// surface non-manifold (the link condition, two borders pinched
-    /// together, two edges of three faces fused), closed parts flattened
-    /// into double-sided sheets (duplicate faces, which a later
-    /// contraction can take away), then feature vertices (seams, hard
-    /// edges, material borders) leaving their lines, then faces turning
-    /// over or collapsing to slivers. Each stage runs in cost order; with
-    /// [`Schedule::Passes`] a pass that made any contraction is followed
-    /// by one with every rule back, unless the topology rules held it
-    /// (refused more than a quarter as many candidates as it contracted):
-    /// then the next relaxes joins and flattening, so a mesh whose
-    /// topology holds its triangles (beetle) changes it where that is
-    /// cheapest instead of forcing costly contractions first. Every contraction is still a vertex
-    /// split of the log (replay stays exact); `Stats::relaxed` counts them
-    /// by the rule they broke. Locked vertices ([`Boundary::Locked`])
-    /// stay locked and `max_error` still binds. Default value: `false`:
-    /// a mesh whose topology holds the triangles (beetle.obj: edges of
-    /// three faces, 23 border loops) stops above its target
-    /// ([`crate::StopReason::Exhausted`]).
-    pub allow_topology_change: bool,
+    /// What the run may do to the surface's topology to reach its target
+    /// ([`TopologyChange`]; default [`TopologyChange::WhenShort`]).
+    pub topology_change: TopologyChange,
 }
 
 impl SimplifyOptions {
@@ -170,7 +197,7 @@ impl SimplifyOptions {
         },
         partition: Some(DEFAULT_CLUSTER_TRIANGLES),
         reach: Some(DEFAULT_REACH_FACTOR),
-        allow_topology_change: false,
+        topology_change: TopologyChange::WhenShort,
     };
     /// Stop at `n` triangles.
     pub fn with_target_triangles(mut self, n: usize) -> Self {
@@ -226,10 +253,19 @@ impl SimplifyOptions {
         self
     }
 
-    /// When stuck before the target, go on with topology-changing
-    /// contractions ([`SimplifyOptions::allow_topology_change`]).
+    /// What the run may do to the topology ([`TopologyChange`]).
+    pub fn with_topology_change(mut self, t: TopologyChange) -> Self {
+        self.topology_change = t;
+        self
+    }
+
+    /// `true`: [`TopologyChange::All`]; `false`: [`TopologyChange::Never`].
     pub fn with_allow_topology_change(mut self, on: bool) -> Self {
-        self.allow_topology_change = on;
+        self.topology_change = if on {
+            TopologyChange::All
+        } else {
+            TopologyChange::Never
+        };
         self
     }
 

@@ -5,7 +5,7 @@
 
 use super::legality::{fuses_odd_edges, lands_on_any, link, moved_faces_ok, Faces};
 use super::reach::REACH_GATE;
-use super::{dv, Plan, Rejected, Simplifier};
+use super::{dv, Plan, Rejected, Simplifier, TopologyChange};
 use crate::mesh::adjacency::FanLookup;
 use crate::util::prefetch;
 use glam::DVec3;
@@ -72,7 +72,7 @@ impl Simplifier {
     /// Legality of contracting `v0` into `v1` at `p`, cheapest test first.
     /// On success returns the triangles the contraction deletes, and the
     /// first rule it breaks that the run's relaxation stage (`Pass::relax`,
-    /// [`crate::SimplifyOptions::allow_topology_change`]) lets pass.
+    /// [`crate::SimplifyOptions::topology_change`]) lets pass.
     pub(super) fn check(
         &self,
         v0: u32,
@@ -130,10 +130,15 @@ impl Simplifier {
         if joined && lands_on_any(faces, v0, v1) {
             refuse(Rejected::Duplicate)?;
         }
-        // (a flattened part's last two faces are on one edge: relaxed, the
-        // mesh keeps at least one face)
-        if let Some(r) = broke.filter(|_| l.shared.len() >= self.live_tris) {
-            return Err(r);
+        // (a flattened part's last two faces are on one edge: a run that
+        // relaxes the rules keeps at least one face, even through a
+        // contraction that breaks none)
+        let relaxing = !matches!(
+            self.opts.topology_change,
+            TopologyChange::Never | TopologyChange::WhenShort
+        );
+        if (broke.is_some() || relaxing) && l.shared.len() >= self.live_tris {
+            return Err(broke.unwrap_or(Rejected::Degenerate));
         }
         Ok((l.shared, broke))
     }

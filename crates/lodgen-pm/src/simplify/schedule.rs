@@ -8,7 +8,7 @@ use super::{dv, Entry, Pass, PassEntry, Rejected, Simplifier, StopReason};
 use crate::mesh::adjacency::FanLookup;
 use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
 use crate::simplify::quadric::{CostLanes, Quadric, LANES};
-use crate::simplify::{Placement, Schedule};
+use crate::simplify::{Placement, Schedule, TopologyChange};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -35,8 +35,8 @@ const SPREAD_FACTOR: f64 = 1.5;
 /// evenly spaced in the pass's order (a bounded cost per pass).
 const SPREAD_SAMPLES: usize = 1 << 12;
 
-/// [`SimplifyOptions::allow_topology_change`](crate::SimplifyOptions::allow_topology_change)
-/// with [`Schedule::Passes`]: a pass after one whose candidates refused by
+/// [`TopologyChange::Joins`] or [`TopologyChange::All`] with
+/// [`Schedule::Passes`]: a pass after one whose candidates refused by
 /// the topology rules (link, border pinch, duplicate; or contracted
 /// breaking one) outnumbered this share of its contractions relaxes joins
 /// and flattening (`Relax::Sheets`). Measured by `target/release/xtask
@@ -68,6 +68,18 @@ pub(super) fn pass_order(x: &PassEntry) -> u32 {
 }
 
 impl Simplifier {
+    /// The furthest stage of [`Relax`] the run's
+    /// [`TopologyChange`] lets it reach (`Relax::None`: none;
+    /// [`TopologyChange::WhenShort`]'s second run is `simplify`'s, with
+    /// [`TopologyChange::Joins`]).
+    fn relax_cap(&self) -> Relax {
+        match self.opts.topology_change {
+            TopologyChange::Never | TopologyChange::WhenShort => Relax::None,
+            TopologyChange::Joins => Relax::Sheets,
+            TopologyChange::All => Relax::Flips,
+        }
+    }
+
     /// Re-cost every queued pair (after the costs' inputs changed).
     pub(super) fn rebuild_heap(&mut self) {
         if self.opts.schedule != Schedule::Greedy {
@@ -115,7 +127,7 @@ impl Simplifier {
             // stuck: every pair again, with the rules relaxed a stage
             // further (a greedy run keeps the stage from here on)
             match self.pass.relax.next() {
-                Some(r) if self.opts.allow_topology_change => {
+                Some(r) if r <= self.relax_cap() => {
                     self.pass.relax = r;
                     self.fill_heap(self.live_pairs(), &[]);
                 }
@@ -176,6 +188,7 @@ impl Simplifier {
     }
 
     pub(super) fn step_pass(&mut self, factor: f32) -> Result<(), StopReason> {
+        let cap = self.relax_cap();
         loop {
             let pass = &mut self.pass;
             if pass.cursor >= pass.queue.len() {
@@ -186,8 +199,8 @@ impl Simplifier {
                     // they held this one: refused more than a share of
                     // what it contracted)
                     let held = pass.refused as f64 > RELAX_SHARE * pass.collapses as f64;
-                    pass.relax = if self.opts.allow_topology_change && held {
-                        Relax::Sheets
+                    pass.relax = if held {
+                        cap.min(Relax::Sheets)
                     } else {
                         Relax::None
                     };
@@ -196,7 +209,7 @@ impl Simplifier {
                     // nothing changed: the next pass would be the same,
                     // unless the rules relax a stage further
                     match pass.relax.next() {
-                        Some(r) if self.opts.allow_topology_change => pass.relax = r,
+                        Some(r) if r <= cap => pass.relax = r,
                         _ => {
                             return Err(if pass.error_rejections > 0 {
                                 StopReason::MaxError

@@ -94,7 +94,7 @@ pub struct Stats {
     /// Candidates refused, by reason.
     pub rejected: Rejections,
     /// Contractions made only because
-    /// [`SimplifyOptions::allow_topology_change`](super::SimplifyOptions::allow_topology_change)
+    /// [`SimplifyOptions::topology_change`](super::SimplifyOptions::topology_change)
     /// is on, by the rule each broke (the first the usual checks would
     /// have refused it for).
     pub relaxed: Rejections,

@@ -341,9 +341,11 @@ def simplify(
     ``reach=False`` (or ``None``, as in Rust) to turn it off;
     ``polish=True`` moves each returned level's vertices towards the input
     (lower error, same triangles; the progressive mesh keeps the
-    simplifier's positions); ``allow_topology_change=True`` lets a level
-    reach a count the topology would stop above (holes close, sheets
-    join; ``result.note`` says when a level stopped above its count).
+    simplifier's positions); a level the topology would stop above its
+    count is reached by running again with joins and flattening allowed
+    (holes close, sheets join), ``keep_topology=True`` stops above it
+    instead, ``allow_topology_change=True`` also lets hard edges, seams and
+    faces go (``result.note`` says when a level stopped above its count).
 
     Levels come finest first (as the command writes them), whatever the
     order asked. Each level's vertices have the input's float dtype, faces

@@ -253,15 +253,17 @@ def test_polish_moves_the_written_levels_towards_the_input():
         assert b.errors.hausdorff < a.errors.hausdorff, (a.errors, b.errors)
 
 
-def test_allow_topology_change_reaches_a_count_the_topology_stops():
-    # a closed torus keeps its hole: the default stops above 16 triangles
-    # and says why; allowed to join sheets, it reaches the count
+def test_topology_change_reaches_a_count_the_topology_stops():
+    # a closed torus keeps its hole: with keep_topology=True it stops above
+    # 16 triangles and says why; by default (run again with joins allowed)
+    # and with allow_topology_change=True it reaches the count
     v, f = torus()
-    kept = lodgen.simplify(v, f, levels=[16])
+    kept = lodgen.simplify(v, f, levels=[16], keep_topology=True)
     assert len(kept.levels[0].faces) > 16
     assert "allow-topology-change" in kept.note, kept.note
-    changed = lodgen.simplify(v, f, levels=[16], allow_topology_change=True)
-    assert len(changed.levels[0].faces) == 16
-    assert changed.note == ""
-    v_l, f_l = changed.progressive.mesh_at_splits(changed.levels[0].splits)
-    assert len(f_l) == 16
+    for kw in ({}, {"allow_topology_change": True}):
+        changed = lodgen.simplify(v, f, levels=[16], **kw)
+        assert len(changed.levels[0].faces) == 16, kw
+        assert changed.note == "", kw
+        v_l, f_l = changed.progressive.mesh_at_splits(changed.levels[0].splits)
+        assert len(f_l) == 16, kw

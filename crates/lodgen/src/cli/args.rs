@@ -8,7 +8,9 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use lodgen_pm::levels::LevelSpec;
 use lodgen_pm::metric::MeasureOptions;
-use lodgen_pm::{Boundary, Placement, Schedule, SimplifyOptions, Tau, DEFAULT_BOUNDARY_WEIGHT};
+use lodgen_pm::{
+    Boundary, Placement, Schedule, SimplifyOptions, Tau, TopologyChange, DEFAULT_BOUNDARY_WEIGHT,
+};
 
 use crate::gltf_out::{Compression, WriteOptions};
 use crate::lod::{self, AttributeWeights, BuildOptions, LevelRequest};
@@ -110,17 +112,25 @@ pub struct BuildArgs {
     )]
     pub reach: String,
 
-    /// Reach every requested triangle count, at the price of the surface's
-    /// topology: when no contraction that keeps it is left (the table's
-    /// note says where a mesh stopped, and why), go on with the refused
-    /// kinds, one more each time the run is stuck again — joins that make
-    /// the surface non-manifold or pinch two borders together, closed parts
-    /// flattened into double-sided sheets, seams and hard edges leaving
-    /// their lines, faces turning over — cheapest first. Holes may merge,
-    /// panels fuse with the body, small closed parts flatten. Off by
-    /// default (docs/quality.md, "Reaching the count").
-    #[arg(long)]
+    /// Reach every requested triangle count, at any price to the
+    /// surface's topology and features: when no contraction that keeps
+    /// them is left (the table's note says where a mesh stopped, and why),
+    /// go on with the refused kinds, one more each time the run is stuck
+    /// again — joins that make the surface non-manifold or pinch two
+    /// borders together, closed parts flattened into double-sided sheets,
+    /// seams and hard edges leaving their lines, faces turning over —
+    /// cheapest first. Without it (the default), a run that the topology
+    /// stops above the coarsest level runs again allowing joins and
+    /// flattening only (docs/quality.md, "Reaching the count").
+    #[arg(long, conflicts_with = "keep_topology")]
     pub allow_topology_change: bool,
+
+    /// Never change the surface's topology: a mesh whose topology holds its
+    /// triangles (non-manifold edges, many border loops) stops above the
+    /// coarsest level instead of running again with joins and flattening
+    /// allowed (the default).
+    #[arg(long)]
+    pub keep_topology: bool,
 
     /// Polish each written level: after simplification, move its vertices
     /// towards the original surface (two rounds of least-squares moves
@@ -407,7 +417,13 @@ impl BuildArgs {
                 ScheduleMode::Greedy => Schedule::Greedy,
             })
             .with_reach(parse_reach(&self.reach)?)
-            .with_allow_topology_change(self.allow_topology_change);
+            .with_topology_change(if self.allow_topology_change {
+                TopologyChange::All
+            } else if self.keep_topology {
+                TopologyChange::Never
+            } else {
+                TopologyChange::WhenShort
+            });
         let method: lodgen_pm::Method = self
             .method
             .parse()

@@ -117,8 +117,11 @@ pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> Strin
     let relaxable = r.link + r.boundary_pinch + r.duplicate + r.feature + r.flip + r.degenerate;
     let hint = if stop != lodgen_pm::StopReason::Exhausted || relaxable == 0 {
         ""
-    } else if stats.relaxed.total() > 0 {
+    } else if stats.relaxed.feature + stats.relaxed.flip + stats.relaxed.degenerate > 0 {
         "; --allow-topology-change went no further"
+    } else if stats.relaxed.total() > 0 {
+        "; run again with joins and flattening allowed, it went no further; \
+         --allow-topology-change also lets seams, hard edges and faces go"
     } else {
         "; --allow-topology-change reaches it, at the price of the surface's topology"
     };
@@ -134,7 +137,8 @@ pub fn stop_note(stop: lodgen_pm::StopReason, stats: &lodgen_pm::Stats) -> Strin
     )
 }
 
-/// What `--allow-topology-change` did, in words (`None`: nothing).
+/// What the relaxed topology rules let the run do (the default's second
+/// run, `--allow-topology-change`), in words (`None`: nothing).
 pub fn topology_note(stats: &lodgen_pm::Stats) -> Option<String> {
     let r = &stats.relaxed;
     if r.total() == 0 {
@@ -154,7 +158,8 @@ pub fn topology_note(stats: &lodgen_pm::Stats) -> Option<String> {
     .map(|(n, w)| format!("{n} {w}"))
     .collect();
     Some(format!(
-        "--allow-topology-change: {} contractions changed the topology to reach the coarsest level ({})",
+        "{} contractions changed the topology ({}; \
+         --keep-topology turns this off)",
         r.total(),
         kinds.join(", ")
     ))

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::{
     levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
-    SimplifyOptions,
+    SimplifyOptions, TopologyChange,
 };
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh, Warning};
@@ -199,6 +199,9 @@ fn return_freed_memory(input_triangles: usize) {
 /// cannot fail on the original (it passed the preparation's checks); if
 /// a level fails its measurement the mesh is written as its welded input
 /// ([`restore_input`]).
+/// (The caller keeps a small mesh's input, under `SIDE_BY_SIDE_MAX_TRIANGLES`,
+/// with `TopologyChange::WhenShort`: a freed input cannot be simplified
+/// again, so a large mesh the topology stops runs once.)
 fn frees_input_early(owned: bool, mesh: &SourceMesh, opts: &BuildOptions) -> bool {
     let [p] = mesh.primitives.as_slice() else {
         return false;
@@ -275,7 +278,8 @@ fn build_mesh(
         && sopts.target_triangles.is_none_or(|t| t < input_triangles);
     let t_build = Instant::now();
     let mut welded = None;
-    let freed = !early && frees_input_early(matches!(mesh, Cow::Owned(_)), mesh, opts);
+    let again = side_by_side && sopts.topology_change == TopologyChange::WhenShort;
+    let freed = !early && !again && frees_input_early(matches!(mesh, Cow::Owned(_)), mesh, opts);
     let (mut simplified, early, flat) = if freed {
         let (simplified, flat) = simplify_freeing(mesh, opts, &sopts).map_err(mesh_err)?;
         (simplified, None, flat)
