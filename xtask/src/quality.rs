@@ -29,7 +29,9 @@
 //! ratios are against the recorded best peer. `--meshes a,b` runs a subset;
 //! `--no-peers` skips the Python tools; `--greedy` runs lodgen with
 //! `Schedule::Greedy` instead of its default pass schedule; `--reach-off` with
-//! `SimplifyOptions::reach` off (it is on by default); `--polish`
+//! `SimplifyOptions::reach` off (it is on by default); `--reach-faces` with
+//! `SimplifyOptions::reach_faces` at `DEFAULT_REACH_FACES_FACTOR` (off by
+//! default); `--polish`
 //! polishes lodgen's levels (`lodgen_pm::polish`, default options, against
 //! the welded input and its hierarchy) before they are measured.
 
@@ -95,6 +97,8 @@ struct Args {
     python: bool,
     greedy: bool,
     reach_off: bool,
+    /// `SimplifyOptions::reach_faces` at its suggested factor.
+    reach_faces: bool,
     polish: bool,
     fresh: bool,
 }
@@ -106,6 +110,7 @@ fn parse(args: &[String]) -> Result<Args> {
         python: true,
         greedy: false,
         reach_off: false,
+        reach_faces: false,
         polish: false,
         fresh: false,
     };
@@ -125,11 +130,12 @@ fn parse(args: &[String]) -> Result<Args> {
             "--no-peers" => out.python = false,
             "--greedy" => out.greedy = true,
             "--reach-off" => out.reach_off = true,
+            "--reach-faces" => out.reach_faces = true,
             "--polish" => out.polish = true,
             "--fresh" => out.fresh = true,
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach-off, --polish, --fresh)"
+                 --reach-off, --reach-faces, --polish, --fresh)"
             ),
         }
     }
@@ -158,13 +164,16 @@ fn input(assets: &Path, name: &str) -> Result<Mesh> {
 }
 
 /// lodgen's levels: one run to the smallest ratio, levels cut from the log.
-fn lodgen_levels(m: &Mesh, greedy: bool, reach_off: bool) -> Result<Vec<Mesh>> {
+fn lodgen_levels(m: &Mesh, args: &Args) -> Result<Vec<Mesh>> {
     let n = m.triangles.len();
     let mut opts = SimplifyOptions::DEFAULT.with_target_ratio(RATIOS[RATIOS.len() - 1]);
-    if reach_off {
+    if args.reach_off {
         opts = opts.with_reach(None);
     }
-    if greedy {
+    if args.reach_faces {
+        opts = opts.with_reach_faces(Some(lodgen_pm::DEFAULT_REACH_FACES_FACTOR));
+    }
+    if args.greedy {
         opts = opts.with_schedule(lodgen_pm::Schedule::Greedy);
     }
     let out = simplify(&m.positions, &m.indices(), &opts)?;
@@ -224,7 +233,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
-        let mut levels = lodgen_levels(&m, args.greedy, args.reach_off)?;
+        let mut levels = lodgen_levels(&m, &args)?;
         if args.polish {
             let popts = lodgen_pm::PolishOptions::DEFAULT;
             for level in &mut levels {

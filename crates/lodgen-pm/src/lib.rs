@@ -58,7 +58,8 @@ pub use progressive::{
 pub use simplify::{
     Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
     SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, TopologyChange,
-    DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
+    DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
+    DEFAULT_REACH_FACES_FACTOR, DEFAULT_REACH_FACTOR,
 };
 
 /// A simplification's result: the progressive mesh (numbered as in

@@ -668,6 +668,34 @@ fn reach_lowers_the_cows_hausdorff_error() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// `--reach-faces` reaches the simplifier: the cow's 50 % level differs
+/// from the default's; without a value the factor is
+/// `DEFAULT_REACH_FACES_FACTOR`; a factor that is not positive is refused.
+#[test]
+fn reach_faces_flag_reaches_the_simplifier() {
+    let Some(input) = lodgen::assets::shared_asset("cow.obj") else {
+        eprintln!("skipped: cow.obj not found (set LODGEN_ASSETS)");
+        return;
+    };
+    let d = tmp("reach-faces");
+    let run = |extra: &[&str], name: &str| build_with_report(&input, "50%", &d, name, extra).1;
+    let plain = run(&[], "plain");
+    let flag = run(&["--reach-faces"], "flag");
+    let factor = lodgen_pm::DEFAULT_REACH_FACES_FACTOR.to_string();
+    let with_factor = run(&["--reach-faces", &factor], "factor");
+    assert_ne!(plain, flag, "--reach-faces changed nothing");
+    assert_eq!(
+        flag, with_factor,
+        "--reach-faces is not --reach-faces {factor}"
+    );
+    for bad in ["0", "-1"] {
+        let o = lodgen(&[input.to_str().unwrap(), "--reach-faces", bad]);
+        assert!(!o.status.success(), "--reach-faces {bad} accepted");
+        assert!(stderr(&o).contains("--reach-faces"), "{}", stderr(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// `--polish` moves the written levels' vertices towards the original: on
 /// the bundled knot each level keeps its triangle count and its measured
 /// RMS and Hausdorff errors fall below the unpolished run's (by 12–30 %

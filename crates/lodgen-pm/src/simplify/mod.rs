@@ -53,7 +53,8 @@ pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 pub use meter::{Meter, Stage};
 pub use options::{
     Boundary, Placement, Schedule, SimplifyOptions, Tau, TopologyChange, DEFAULT_BOUNDARY_WEIGHT,
-    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACTOR,
+    DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACES_FACTOR,
+    DEFAULT_REACH_FACTOR,
 };
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
 

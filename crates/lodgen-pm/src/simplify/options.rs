@@ -113,6 +113,15 @@ pub const DEFAULT_CLUSTER_TRIANGLES: usize = 16_384;
 /// 1.38 %, fandisk 2 % 0.32 → 0.33 %, beetle 50 % 0.61 → 0.64 %.
 pub const DEFAULT_REACH_FACTOR: f64 = 1.1;
 
+/// The factor of [`SimplifyOptions::reach_faces`] that `cargo xtask quality
+/// --quick --reach-faces` measures (session 17, docs/quality.md "The new
+/// faces' reach"): geometric mean of lodgen / best peer over 20 cells
+/// Hausdorff 0.922 → 0.886 at 1.2 (0.880 at 0.8, 0.909 at 1, 0.941 at 1.5,
+/// 0.922 at 2), RMS 0.948 → 0.940; with `--polish` 0.880 → 0.828 and
+/// 0.766 → 0.761. Worse at 1.2: bunny 2 % 0.517 → 0.721 %, spot 2 % 3.46 →
+/// 3.73 %; at 0.8 also teapot 2 % 2.08 → 4.61 %, cow 2 % 5.90 → 7.01 %.
+pub const DEFAULT_REACH_FACES_FACTOR: f64 = 1.2;
+
 /// The pair-distance threshold τ of GH97 (non-edge pairs closer than τ may
 /// contract too).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,6 +186,19 @@ pub struct SimplifyOptions {
     /// the bunny (the reach test of every planned pair; +2–5 % of a whole
     /// CLI run's CPU with measurement; docs/performance.md).
     pub reach: Option<f64>,
+    /// With [`SimplifyOptions::reach`] on, a pass also defers a pair one
+    /// of whose new faces leaves the old surface farther than this factor
+    /// × the reach distance: the midpoints of the moved faces' edges from
+    /// the merged vertex, and their centroids, against the two old fans
+    /// (reach tests vertices only, so a new face can bridge a dent or cut
+    /// a bump between vertices that stay close). Off by default (`None`):
+    /// it lowers the Hausdorff distance of most 50 % and 10 % levels
+    /// (bunny 10 % 0.246 → 0.187 %, spot 10 % 0.963 → 0.915 %, cow 50 %
+    /// 0.266 → 0.204 %) but raises some 2 % ones (bunny 2 % 0.517 →
+    /// 0.721 %), and it costs ≈ 50 % more CPU on the bunny's CLI run (more
+    /// deferrals, more passes; docs/quality.md). Suggested value:
+    /// [`DEFAULT_REACH_FACES_FACTOR`].
+    pub reach_faces: Option<f64>,
     /// What the run may do to the surface's topology to reach its target
     /// ([`TopologyChange`]; default [`TopologyChange::WhenShort`]).
     pub topology_change: TopologyChange,
@@ -197,6 +219,7 @@ impl SimplifyOptions {
         },
         partition: Some(DEFAULT_CLUSTER_TRIANGLES),
         reach: Some(DEFAULT_REACH_FACTOR),
+        reach_faces: None,
         topology_change: TopologyChange::WhenShort,
     };
     /// Stop at `n` triangles.
@@ -250,6 +273,14 @@ impl SimplifyOptions {
     /// pass's spread bound (`None`: never).
     pub fn with_reach(mut self, f: Option<f64>) -> Self {
         self.reach = f;
+        self
+    }
+
+    /// Defer contractions whose new faces leave the old surface farther
+    /// than `f` × the reach distance ([`SimplifyOptions::reach_faces`];
+    /// `None`: never; no effect with reach off).
+    pub fn with_reach_faces(mut self, f: Option<f64>) -> Self {
+        self.reach_faces = f;
         self
     }
 

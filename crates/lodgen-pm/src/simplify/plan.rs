@@ -48,10 +48,13 @@ impl Simplifier {
             .opts
             .reach
             .map_or(f64::INFINITY, |f| self.pass.spread_limit * f * f);
-        let deferred = limit.is_finite()
-            && limit > 0.0
-            && error * error >= REACH_GATE * limit
-            && self.reach_over(v0, v1, p, !removed.is_empty(), limit);
+        let tested = limit.is_finite() && limit > 0.0 && error * error >= REACH_GATE * limit;
+        let deferred = tested
+            && (self.reach_over(v0, v1, p, !removed.is_empty(), limit)
+                || self
+                    .opts
+                    .reach_faces
+                    .is_some_and(|f| self.faces_over(v0, v1, p, limit * f * f)));
         let hole = if removed.len() == 1 {
             self.hole_cost(v0, v1)
         } else {
