@@ -32,8 +32,10 @@
 //! `SimplifyOptions::reach` off (it is on by default); `--reach-faces` with
 //! `SimplifyOptions::reach_faces` at `DEFAULT_REACH_FACES_FACTOR` (off by
 //! default); `--polish`
-//! polishes lodgen's levels (`lodgen_pm::polish`, default options, against
-//! the welded input and its hierarchy) before they are measured.
+//! polishes lodgen's levels as `lodgen --polish` does
+//! (`lodgen_pm::polish_clusters`, `PolishOptions::CLUSTERS`) before they are
+//! measured, `--polish-exact` with `lodgen_pm::polish` (the hierarchies'
+//! closest points, default options).
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -99,8 +101,17 @@ struct Args {
     reach_off: bool,
     /// `SimplifyOptions::reach_faces` at its suggested factor.
     reach_faces: bool,
-    polish: bool,
+    polish: Option<Polish>,
     fresh: bool,
+}
+
+/// How `--polish` pairs the surfaces.
+#[derive(Clone, Copy, PartialEq)]
+enum Polish {
+    /// From the simplification's clusters (`lodgen_pm::polish_clusters`).
+    Clusters,
+    /// Closest points through the hierarchies (`lodgen_pm::polish`).
+    Exact,
 }
 
 fn parse(args: &[String]) -> Result<Args> {
@@ -111,7 +122,7 @@ fn parse(args: &[String]) -> Result<Args> {
         greedy: false,
         reach_off: false,
         reach_faces: false,
-        polish: false,
+        polish: None,
         fresh: false,
     };
     let mut it = args.iter();
@@ -131,11 +142,12 @@ fn parse(args: &[String]) -> Result<Args> {
             "--greedy" => out.greedy = true,
             "--reach-off" => out.reach_off = true,
             "--reach-faces" => out.reach_faces = true,
-            "--polish" => out.polish = true,
+            "--polish" => out.polish = Some(Polish::Clusters),
+            "--polish-exact" => out.polish = Some(Polish::Exact),
             "--fresh" => out.fresh = true,
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach-off, --reach-faces, --polish, --fresh)"
+                 --reach-off, --reach-faces, --polish, --polish-exact, --fresh)"
             ),
         }
     }
@@ -178,11 +190,36 @@ fn lodgen_levels(m: &Mesh, args: &Args) -> Result<Vec<Mesh>> {
     }
     let out = simplify(&m.positions, &m.indices(), &opts)?;
     let mut c = out.pm.cursor();
+    let full = out.pm.mesh_at_splits(out.pm.len());
+    let original = (args.polish == Some(Polish::Clusters))
+        .then(|| lodgen_pm::polish::Original::new(MeshRef::new(&full.positions, &full.triangles)));
+    let reference = match args.polish {
+        Some(Polish::Exact) => Some(Reference::new(MeshRef::new(&m.positions, &m.triangles))?),
+        _ => None,
+    };
     Ok(RATIOS
         .iter()
         .map(|r| {
-            c.seek(out.pm.splits_for_triangles((r * n as f64).floor() as usize));
-            c.mesh().clone()
+            let k = out.pm.splits_for_triangles((r * n as f64).floor() as usize);
+            c.seek(k);
+            let mut level = c.mesh().clone();
+            match (&original, &reference) {
+                (Some(original), _) => {
+                    let rep = out.pm.representatives(k);
+                    let popts = lodgen_pm::PolishOptions::CLUSTERS;
+                    lodgen_pm::polish_clusters(original, &mut level, &rep, &popts);
+                }
+                (None, Some(reference)) => {
+                    lodgen_pm::polish(
+                        MeshRef::new(&m.positions, &m.triangles),
+                        reference.bvh(),
+                        &mut level,
+                        &lodgen_pm::PolishOptions::DEFAULT,
+                    );
+                }
+                _ => {}
+            }
+            level
         })
         .collect())
 }
@@ -233,18 +270,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
-        let mut levels = lodgen_levels(&m, &args)?;
-        if args.polish {
-            let popts = lodgen_pm::PolishOptions::DEFAULT;
-            for level in &mut levels {
-                lodgen_pm::polish(
-                    MeshRef::new(&m.positions, &m.triangles),
-                    reference.bvh(),
-                    level,
-                    &popts,
-                );
-            }
-        }
+        let levels = lodgen_levels(&m, &args)?;
         let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
         // levels whose recorded peers' cells may stand (all of them in a
         // quick run, which only says when a count moved)

@@ -50,7 +50,7 @@ pub use adaptive::{
 };
 pub use glam;
 pub use mesh::{prepare, Mesh, MeshError, PrepareStats, Prepared};
-pub use polish::{polish, PolishOptions, PolishStats};
+pub use polish::{polish, polish_clusters, PolishOptions, PolishStats};
 pub use progressive::{attrfit, levels, stream};
 pub use progressive::{
     Corner, Corners, Cursor, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog,

@@ -2,8 +2,9 @@
 //! original, no face turned over, and the same bits for any thread count.
 
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
+use lodgen_pm::polish::Original;
 use lodgen_pm::shapes::torus;
-use lodgen_pm::{polish, prepare, simplify, Mesh, PolishOptions, SimplifyOptions};
+use lodgen_pm::{polish, polish_clusters, prepare, simplify, Mesh, PolishOptions, SimplifyOptions};
 
 /// The welded original and its level at `ratio`, cut from the log.
 fn level_of(m: &Mesh, ratio: f64) -> (Mesh, Mesh) {
@@ -107,4 +108,101 @@ fn polish_is_the_same_for_any_thread_count() {
     let one = run(1);
     assert_ne!(one, level.positions);
     assert_eq!(one, run(4));
+}
+
+/// Every original vertex's representative is a vertex of the level, a
+/// level vertex its own, and level triangle `t` is original triangle `t`
+/// with its corners replaced by their representatives (what
+/// `polish_clusters` starts its walks from). Fails when a representative
+/// is taken from the wrong end of a split (`v0` for `v1`) or splits below
+/// the level are followed.
+#[test]
+fn representatives_map_the_original_onto_the_level() {
+    let (orig, _) = level_of(&torus(1.0, 0.35, 48, 24), 0.1);
+    let out = simplify(
+        &orig.positions,
+        &orig.indices(),
+        &SimplifyOptions::DEFAULT.with_target_ratio(0.1),
+    )
+    .unwrap();
+    let full = out.pm.mesh_at_splits(out.pm.len());
+    for k in [0, out.pm.len() / 3, out.pm.len() - 1, out.pm.len()] {
+        let level = out.pm.mesh_at_splits(k);
+        let rep = out.pm.representatives(k);
+        assert_eq!(rep.len(), full.positions.len());
+        let n = level.positions.len();
+        for (v, &r) in rep.iter().enumerate() {
+            assert!((r as usize) < n, "vertex {v} -> {r} at split {k}");
+            if v < n {
+                assert_eq!(r as usize, v, "a level vertex is its own");
+            }
+        }
+        for (t, (lt, ft)) in level.triangles.iter().zip(&full.triangles).enumerate() {
+            assert_eq!(
+                *lt,
+                ft.map(|v| rep[v as usize]),
+                "triangle {t} at split {k}"
+            );
+        }
+    }
+}
+
+/// `polish_clusters` (the pairs from the simplification, no hierarchy) on
+/// the torus at 10 %: closer to the original, same faces, none turned
+/// over, and the same bits for one thread and four. Fails when it leaves
+/// the level as it is or moves it away.
+#[test]
+fn clusters_polish_is_closer_and_deterministic() {
+    let (orig, _) = level_of(&torus(1.0, 0.35, 96, 48), 0.1);
+    let out = simplify(
+        &orig.positions,
+        &orig.indices(),
+        &SimplifyOptions::DEFAULT.with_target_ratio(0.1),
+    )
+    .unwrap();
+    let full = out.pm.mesh_at_splits(out.pm.len());
+    let k = out.pm.splits_for_triangles(full.triangles.len() / 10);
+    let level = out.pm.mesh_at_splits(k);
+    let rep = out.pm.representatives(k);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let original = Original::new(MeshRef::new(&full.positions, &full.triangles));
+            let mut m = level.clone();
+            let stats = polish_clusters(&original, &mut m, &rep, &PolishOptions::CLUSTERS);
+            (m, stats)
+        })
+    };
+    let (polished, stats) = run(1);
+    assert!(stats.moved > 0, "{stats:?}");
+    assert_eq!(polished.triangles, level.triangles, "topology unchanged");
+    assert_eq!(polished.positions, run(4).0.positions);
+    let reference = Reference::new(MeshRef::new(&full.positions, &full.triangles)).unwrap();
+    let mopts = MeasureOptions::DEFAULT.with_min_samples(200_000);
+    let err = |m: &Mesh| {
+        reference
+            .measure(MeshRef::new(&m.positions, &m.triangles), &mopts)
+            .unwrap()
+    };
+    let (before, after) = (err(&level), err(&polished));
+    assert!(
+        after.rms() < 0.85 * before.rms(),
+        "RMS {} -> {}",
+        before.rms_percent(),
+        after.rms_percent()
+    );
+    assert!(
+        after.hausdorff() <= before.hausdorff() * 1.02,
+        "Hausdorff {} -> {}",
+        before.hausdorff_percent(),
+        after.hausdorff_percent()
+    );
+    for &t in &level.triangles {
+        let (a, b) = (normal(&level, t), normal(&polished, t));
+        let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
+        assert!(dot > 0.0, "face {t:?} flipped");
+    }
 }

@@ -243,6 +243,20 @@ impl ProgressiveMesh {
         }
     }
 
+    /// For every vertex of the full mesh, the vertex of the mesh after `k`
+    /// splits (clamped to `len()`) it is merged into there: itself when
+    /// that mesh has it (below `base + k`), else the representative of the
+    /// vertex its split came from (`v1`).
+    pub fn representatives(&self, k: usize) -> Vec<u32> {
+        let k = k.min(self.len());
+        let nb = self.base.positions.len() as u32;
+        let mut rep: Vec<u32> = (0..nb + self.len() as u32).collect();
+        for s in &self.splits[k..] {
+            rep[s.v0 as usize] = rep[s.v1 as usize];
+        }
+        rep
+    }
+
     /// The fully refined mesh in the welded input's own vertex and triangle
     /// numbering: equal, index for index, to the mesh that was simplified.
     pub fn full_in_input_order(&self) -> Mesh {

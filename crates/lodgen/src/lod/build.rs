@@ -6,6 +6,7 @@ use std::borrow::Cow;
 use std::time::{Duration, Instant};
 
 use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
+use lodgen_pm::polish::Original;
 use lodgen_pm::{
     levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
     SimplifyOptions, TopologyChange,
@@ -390,33 +391,32 @@ fn extract_all(
     measurer: &Measurer<'_>,
     (side_by_side, freed): (bool, bool),
 ) -> Result<Vec<Extracted>, BuildError> {
-    let extracted = if let Some(popts) = &opts.polish {
-        // (the polish needs the original's hierarchy first)
-        let polish = Polish {
-            measurer,
-            opts: popts,
-        };
-        extract_levels(
-            mesh,
-            flat,
-            simplified,
-            splits,
-            (opts.measured, freed),
-            Some(polish),
-        )?
-    } else if side_by_side {
+    // (the polish walks from the simplification's clusters: no hierarchy)
+    let full = measurer.full();
+    let original = opts
+        .polish
+        .map(|_| Original::new(MeshRef::new(&full.positions, &full.triangles)));
+    let polish = original.as_ref().zip(opts.polish.as_ref());
+    let extracted = if side_by_side {
         // (the original's hierarchy built on the other core meanwhile)
         let (extracted, prepared) = rayon::join(
             || {
                 let what = (opts.measured, freed);
-                extract_levels(mesh, flat, simplified, splits, what, None)
+                extract_levels(mesh, flat, simplified, splits, what, polish)
             },
             || measurer.prepare(),
         );
         prepared?;
         extracted?
     } else {
-        extract_levels(mesh, flat, simplified, splits, (opts.measured, freed), None)?
+        extract_levels(
+            mesh,
+            flat,
+            simplified,
+            splits,
+            (opts.measured, freed),
+            polish,
+        )?
     };
     Ok(extracted)
 }
@@ -576,7 +576,7 @@ fn extract_levels(
     simplified: &Simplified,
     splits: &[usize],
     (measured, deferred): (bool, bool),
-    polish: Option<Polish<'_, '_>>,
+    polish: Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
 ) -> Result<Vec<Extracted>, BuildError> {
     let pm = &simplified.pm;
     let mut cursor = pm.cursor();
@@ -586,9 +586,10 @@ fn extract_levels(
     for &k in splits {
         cursor.seek(k);
         let mut m = cursor.mesh();
-        if let (Some(p), true) = (&polish, k < pm.len()) {
+        if let (Some((original, popts)), true) = (polish, k < pm.len()) {
+            // (the written level polished: [`BuildOptions::polish`])
             polished.clone_from(m);
-            p.measurer.polish(&mut polished, p.opts)?;
+            lodgen_pm::polish_clusters(original, &mut polished, &pm.representatives(k), popts);
             m = &polished;
         }
         if deferred {
@@ -639,13 +640,6 @@ fn deferred_primitives(material: Option<usize>, level: &Mesh) -> Vec<Primitive> 
         indices,
         ..Primitive::default()
     }]
-}
-
-/// The polish of the written levels ([`BuildOptions::polish`]): the
-/// measurer holds the original's hierarchy it moves vertices against.
-struct Polish<'m, 'a> {
-    measurer: &'m Measurer<'a>,
-    opts: &'m lodgen_pm::PolishOptions,
 }
 
 /// Whether measuring the levels cannot fail: the original and every level

@@ -103,29 +103,16 @@ impl<'a> Measurer<'a> {
         Ok(())
     }
 
-    /// Moves `level`'s vertices towards the original
-    /// ([`lodgen_pm::polish`]), against the original's hierarchy (built
-    /// here if it is not yet).
-    pub(super) fn polish(
-        &self,
-        level: &mut Mesh,
-        opts: &lodgen_pm::PolishOptions,
-    ) -> Result<(), BuildError> {
-        let reference = self.reference()?;
-        let full = self.full;
-        lodgen_pm::polish(
-            MeshRef::new(&full.positions, &full.triangles),
-            reference.bvh(),
-            level,
-            opts,
-        );
-        Ok(())
-    }
-
     fn add_time(&self, t: Duration) {
         // (a poisoned lock only means another measurement panicked)
         let mut time = self.time.lock().unwrap_or_else(|e| e.into_inner());
         *time += t;
+    }
+
+    /// The original (the fully refined mesh) the levels are measured
+    /// against.
+    pub(super) fn full(&self) -> &'a Mesh {
+        self.full
     }
 
     /// The original's bounding-box diagonal.

@@ -56,7 +56,8 @@ pub struct BuildOptions {
     /// keeps the input for `--progressive` only, whose stream reads it.
     pub keep_input: bool,
     /// Move each written level's vertices towards the original after
-    /// simplification ([`lodgen_pm::polish`]; `None`: off, the default).
+    /// simplification ([`lodgen_pm::polish_clusters`], paired through the
+    /// simplification's clusters; `None`: off, the default).
     /// The written levels and their measured errors are the polished ones;
     /// the progressive mesh and its stream keep the simplifier's positions.
     pub polish: Option<lodgen_pm::PolishOptions>,

@@ -35,14 +35,24 @@
 //!   than [`MAX_TURN_COS`]'s angle or lose its area: such a face's corners
 //!   go half way, up to [`BACK_OFFS`] times, then stay where they were.
 //!
-//! Where it applies: the written levels only (`lodgen --polish`, `xtask
-//! quality --polish`). The vertex-split log and the progressive stream keep
+//! Two ways to pair: [`polish`] queries the hierarchies of both surfaces
+//! (area samples of the original, the closest points exact; `xtask quality
+//! --polish-exact`), [`polish_clusters`] walks from where the
+//! simplification put each vertex (no hierarchy, about a third of the CPU
+//! on the bunny: `clusters.rs`; what `lodgen --polish` and `xtask quality
+//! --polish` run).
+//!
+//! Where it applies: the written levels only. The vertex-split log and the progressive stream keep
 //! the simplifier's positions, so a replayed or streamed level is the
 //! unpolished one.
 //!
 //! Deterministic: samples are made in a fixed order, the queries run in
 //! parallel but are summed in sample order, so any thread count gives the
 //! same bits. Topology is never changed, only positions.
+
+mod clusters;
+
+pub use clusters::{polish_clusters, Original};
 
 use rayon::prelude::*;
 
@@ -57,7 +67,8 @@ pub struct PolishOptions {
     pub iterations: u32,
     /// Samples on the original per level triangle (A → B), at least
     /// [`MIN_SAMPLES`] and at most [`MAX_SAMPLES_PER_ORIGINAL`] per
-    /// original triangle.
+    /// original triangle ([`polish`]; [`polish_clusters`] pairs every
+    /// original vertex).
     pub samples_per_triangle: f64,
 }
 
@@ -65,6 +76,13 @@ impl PolishOptions {
     /// Two iterations, eight original samples per level triangle.
     pub const DEFAULT: PolishOptions = PolishOptions {
         iterations: 2,
+        samples_per_triangle: 8.0,
+    };
+    /// What `lodgen --polish` runs ([`polish_clusters`]): one iteration
+    /// (a second lowers the quick table's RMS by 1.6 % and costs as much
+    /// again: docs/quality.md).
+    pub const CLUSTERS: PolishOptions = PolishOptions {
+        iterations: 1,
         samples_per_triangle: 8.0,
     };
 }
@@ -353,7 +371,9 @@ pub fn polish(
         let pos: Vec<[f64; 3]> = level.positions.iter().map(|&p| widen(p)).collect();
         let acc = accumulate(&pos, level, original, &samples, original_bvh, &topo);
         let mut target = solve_all(&pos, &acc, &topo);
-        guard(&pos, &mut target, &acc, original_bvh);
+        guard(&pos, &mut target, &acc, |_, x| {
+            original_bvh.closest_point(x).map_or(0.0, |r| r.0)
+        });
         let (moved, backed) = apply(&pos, &target, level);
         stats.moved += moved;
         stats.backed_off += backed;
@@ -375,38 +395,9 @@ fn accumulate(
 ) -> Vec<Acc> {
     let level_bvh = TriangleBvh::new(MeshRef::new(&level.positions, &level.triangles))
         .expect("a level's indices and positions are valid");
-    let normals: Vec<Option<[f64; 3]>> = level
-        .triangles
-        .iter()
-        .map(|&t| {
-            let n = area_vector(pos, t);
-            let l = dot(n, n).sqrt();
-            (l > 0.0).then(|| n.map(|x| x / l))
-        })
-        .collect();
+    let normals = face_normals(pos, level);
     let mut acc = vec![Acc::default(); pos.len()];
-    let mut add = |pairs: Vec<Option<Pair>>| {
-        for p in pairs.into_iter().flatten() {
-            let t = level.triangles[p.face as usize];
-            let Some(n) = normals[p.face as usize] else {
-                continue;
-            };
-            let q: [f64; 3] = [0, 1, 2].map(|k| {
-                p.bary[0] * pos[t[0] as usize][k]
-                    + p.bary[1] * pos[t[1] as usize][k]
-                    + p.bary[2] * pos[t[2] as usize][k]
-            });
-            let e = sub(p.target, q);
-            let dist = dot(e, e).sqrt();
-            let u = if dist > 0.0 { e.map(|x| x / dist) } else { n };
-            for (&v, &b) in t.iter().zip(&p.bary) {
-                let d = dot(u, pos[v as usize]) + dot(u, e);
-                acc[v as usize].add_plane(u, d, p.weight * b);
-                acc[v as usize].w += p.weight * b;
-                acc[v as usize].e2 += p.weight * b * dist * dist;
-            }
-        }
-    };
+    let mut add = |pairs: Vec<Option<Pair>>| add_pairs(&mut acc, pos, level, &normals, pairs);
     // A → B: each original sample and its closest level point
     for block in samples.chunks(BLOCK) {
         let pairs: Vec<Option<Pair>> = block
@@ -459,6 +450,50 @@ fn accumulate(
     }
     add_border_planes(pos, topo, &normals, &mut acc);
     acc
+}
+
+/// Each level face's unit normal (`None`: degenerate).
+fn face_normals(pos: &[[f64; 3]], level: &Mesh) -> Vec<Option<[f64; 3]>> {
+    level
+        .triangles
+        .iter()
+        .map(|&t| {
+            let n = area_vector(pos, t);
+            let l = dot(n, n).sqrt();
+            (l > 0.0).then(|| n.map(|x| x / l))
+        })
+        .collect()
+}
+
+/// Adds each pair's plane to the quadrics of its level face's corners
+/// (module docs), in the pairs' order.
+fn add_pairs(
+    acc: &mut [Acc],
+    pos: &[[f64; 3]],
+    level: &Mesh,
+    normals: &[Option<[f64; 3]>],
+    pairs: Vec<Option<Pair>>,
+) {
+    for p in pairs.into_iter().flatten() {
+        let t = level.triangles[p.face as usize];
+        let Some(n) = normals[p.face as usize] else {
+            continue;
+        };
+        let q: [f64; 3] = [0, 1, 2].map(|k| {
+            p.bary[0] * pos[t[0] as usize][k]
+                + p.bary[1] * pos[t[1] as usize][k]
+                + p.bary[2] * pos[t[2] as usize][k]
+        });
+        let e = sub(p.target, q);
+        let dist = dot(e, e).sqrt();
+        let u = if dist > 0.0 { e.map(|x| x / dist) } else { n };
+        for (&v, &b) in t.iter().zip(&p.bary) {
+            let d = dot(u, pos[v as usize]) + dot(u, e);
+            acc[v as usize].add_plane(u, d, p.weight * b);
+            acc[v as usize].w += p.weight * b;
+            acc[v as usize].e2 += p.weight * b * dist * dist;
+        }
+    }
 }
 
 /// Per border edge, the plane through it perpendicular to its face, on both
@@ -514,16 +549,24 @@ fn solve_all(pos: &[[f64; 3]], acc: &[Acc], topo: &Topology) -> Vec<[f64; 3]> {
 /// the surface around a vertex in the mean but takes the vertex itself away
 /// (the tip of a thin part, where the planes around it meet far out) would
 /// raise the maximum.
-fn guard(pos: &[[f64; 3]], target: &mut [[f64; 3]], acc: &[Acc], original_bvh: &TriangleBvh) {
+/// `d2(v, x)`: the squared distance from `x` to the original, for vertex
+/// `v` moved to `x`.
+fn guard(
+    pos: &[[f64; 3]],
+    target: &mut [[f64; 3]],
+    acc: &[Acc],
+    d2: impl Fn(usize, [f64; 3]) -> f64 + Sync,
+) {
     target
         .par_iter_mut()
         .zip(pos)
         .zip(acc)
-        .for_each(|((t, &p), a)| {
+        .enumerate()
+        .for_each(|(v, ((t, &p), a))| {
             if *t == p {
                 return;
             }
-            let d2 = |x: [f64; 3]| original_bvh.closest_point(x).map_or(0.0, |r| r.0);
+            let d2 = |x: [f64; 3]| d2(v, x);
             let allowed = d2(p).max(GUARD_FACTOR * GUARD_FACTOR * a.e2 / a.w);
             let mut s = 1.0;
             for _ in 0..=BACK_OFFS {
