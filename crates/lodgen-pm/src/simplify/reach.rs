@@ -328,15 +328,15 @@ mod tests {
         })
     }
 
-    /// `faces_over` (the fans of centres that move little left out, the
-    /// cheap test, the exact fallback) agrees with the definition on every
-    /// legal pair of a half-simplified noisy torus knot, at limits from far
-    /// below to far above the pairs' moves, with both answers occurring.
-    /// (Fails when a point is misplaced — checked with the centroid taken
-    /// as (p + y + z) / 2 —, when the cheap test accepts a point beside the
-    /// face, or when a deleted face counts.)
-    #[test]
-    fn faces_over_matches_the_exact_distances() {
+    /// Runs `check(s, v0, v1, p, edge, limit)` (which asserts and returns
+    /// the expected answer) on every legal pair of a half-simplified noisy
+    /// torus knot, at limits from far below to far above the pair's move,
+    /// and asserts that both answers occur often. `half_edge_moves: false`
+    /// leaves out the pairs whose `p` is an old corner.
+    fn check_every_pair_of_a_knot(
+        half_edge_moves: bool,
+        mut check: impl FnMut(&Simplifier, u32, u32, DVec3, bool, f64) -> bool,
+    ) {
         let m = shapes::torus_knot(2, 3, 160, 12, 0.02);
         let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.1);
         let mut s = Simplifier::new(&m, &opts).unwrap();
@@ -361,20 +361,15 @@ mod tests {
             for b in nb {
                 let Ok(plan) = s.plan(a, b) else { continue };
                 let (v0, v1, p) = (plan.v0, plan.v1, plan.p);
-                if p == dv(s.pos[v0 as usize]) || p == dv(s.pos[v1 as usize]) {
-                    // (a half-edge move: `p` is an old corner too)
+                if !half_edge_moves && (p == dv(s.pos[v0 as usize]) || p == dv(s.pos[v1 as usize]))
+                {
                     continue;
                 }
+                let edge = !plan.removed.is_empty();
                 let d = (dv(s.pos[v0 as usize]) - p).length();
                 for f in [0.01, 0.1, 0.3, 0.6, 1.2] {
                     let limit = (f * d) * (f * d);
-                    let want = faces_reference(&s, v0, v1, p, limit);
-                    assert_eq!(
-                        s.faces_over(v0, v1, p, limit),
-                        want,
-                        "pair {v0} {v1} at limit {limit}"
-                    );
-                    if want {
+                    if check(&s, v0, v1, p, edge, limit) {
                         over += 1;
                     } else {
                         within += 1;
@@ -383,6 +378,27 @@ mod tests {
             }
         }
         assert!(over > 100 && within > 100, "{over} over, {within} within");
+    }
+
+    /// `faces_over` (the fans of centres that move little left out, the
+    /// cheap test, the exact fallback) agrees with the definition on every
+    /// legal pair of a half-simplified noisy torus knot (half-edge moves
+    /// left out: `p` is an old corner there), at limits from far below to
+    /// far above the pairs' moves, with both answers occurring. (Fails when
+    /// a point is misplaced — checked with the centroid taken as
+    /// (p + y + z) / 2 —, when the cheap test accepts a point beside the
+    /// face, or when a deleted face counts.)
+    #[test]
+    fn faces_over_matches_the_exact_distances() {
+        check_every_pair_of_a_knot(false, |s, v0, v1, p, _, limit| {
+            let want = faces_reference(s, v0, v1, p, limit);
+            assert_eq!(
+                s.faces_over(v0, v1, p, limit),
+                want,
+                "pair {v0} {v1} at limit {limit}"
+            );
+            want
+        });
     }
 
     /// `reach_over` (one walk, the cheap test, the old-edge shortcut, the
@@ -394,48 +410,14 @@ mod tests {
     /// surface.)
     #[test]
     fn reach_over_matches_the_exact_distances() {
-        let m = shapes::torus_knot(2, 3, 160, 12, 0.02);
-        let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.1);
-        let mut s = Simplifier::new(&m, &opts).unwrap();
-        while s.triangle_count() > m.triangles.len() / 2 {
-            s.step().unwrap();
-        }
-        let (mut over, mut within) = (0, 0);
-        for a in 0..s.pos.len() as u32 {
-            if !s.alive[a as usize] {
-                continue;
-            }
-            let mut nb: Vec<u32> = s
-                .vtris
-                .fan(a)
-                .iter()
-                .filter(|&&t| s.tri_alive[t as usize])
-                .flat_map(|&t| s.tris[t as usize])
-                .filter(|&b| b > a)
-                .collect();
-            nb.sort_unstable();
-            nb.dedup();
-            for b in nb {
-                let Ok(plan) = s.plan(a, b) else { continue };
-                let (v0, v1, p) = (plan.v0, plan.v1, plan.p);
-                let edge = !plan.removed.is_empty();
-                let d = (dv(s.pos[v0 as usize]) - p).length();
-                for f in [0.01, 0.1, 0.3, 0.6, 1.2] {
-                    let limit = (f * d) * (f * d);
-                    let want = reference(&s, v0, v1, p, limit);
-                    assert_eq!(
-                        s.reach_over(v0, v1, p, edge, limit),
-                        want,
-                        "pair {v0} {v1} at limit {limit}"
-                    );
-                    if want {
-                        over += 1;
-                    } else {
-                        within += 1;
-                    }
-                }
-            }
-        }
-        assert!(over > 100 && within > 100, "{over} over, {within} within");
+        check_every_pair_of_a_knot(true, |s, v0, v1, p, edge, limit| {
+            let want = reference(s, v0, v1, p, limit);
+            assert_eq!(
+                s.reach_over(v0, v1, p, edge, limit),
+                want,
+                "pair {v0} {v1} at limit {limit}"
+            );
+            want
+        });
     }
 }
