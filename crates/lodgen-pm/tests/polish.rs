@@ -1,7 +1,7 @@
 //! The polish of a level's vertices (`lodgen_pm::polish`): closer to the
 //! original, no face turned over, and the same bits for any thread count.
 
-use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
+use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::polish::Original;
 use lodgen_pm::shapes::torus;
 use lodgen_pm::{polish, polish_clusters, prepare, simplify, Mesh, PolishOptions, SimplifyOptions};
@@ -37,6 +37,35 @@ fn normal(m: &Mesh, t: [u32; 3]) -> [f64; 3] {
     ]
 }
 
+/// The polished level's RMS below `rms_factor` × the level's, its
+/// Hausdorff distance at most 2 % above, and no face turned over (the
+/// back-off keeps each within 60° of itself).
+fn assert_closer_and_unflipped(
+    level: &Mesh,
+    polished: &Mesh,
+    before: &ErrorReport,
+    after: &ErrorReport,
+    rms_factor: f64,
+) {
+    assert!(
+        after.rms() < rms_factor * before.rms(),
+        "RMS {} -> {}",
+        before.rms_percent(),
+        after.rms_percent()
+    );
+    assert!(
+        after.hausdorff() <= before.hausdorff() * 1.02,
+        "Hausdorff {} -> {}",
+        before.hausdorff_percent(),
+        after.hausdorff_percent()
+    );
+    for &t in &level.triangles {
+        let (a, b) = (normal(level, t), normal(polished, t));
+        let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
+        assert!(dot > 0.0, "face {t:?} flipped");
+    }
+}
+
 /// A torus at 10 %: curved everywhere, so every level face is a chord the
 /// polish can improve. Fails when `polish` leaves the level as it is (RMS
 /// equal), or moves it away from the original.
@@ -63,24 +92,7 @@ fn polished_level_is_closer_and_keeps_its_faces() {
         .unwrap();
     assert!(stats.moved > 0, "{stats:?}");
     assert_eq!(polished.triangles, level.triangles, "topology unchanged");
-    assert!(
-        after.rms() < 0.8 * before.rms(),
-        "RMS {} -> {}",
-        before.rms_percent(),
-        after.rms_percent()
-    );
-    assert!(
-        after.hausdorff() <= before.hausdorff() * 1.02,
-        "Hausdorff {} -> {}",
-        before.hausdorff_percent(),
-        after.hausdorff_percent()
-    );
-    // no face turned over (the back-off keeps each within 60° of itself)
-    for &t in &level.triangles {
-        let (a, b) = (normal(&level, t), normal(&polished, t));
-        let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
-        assert!(dot > 0.0, "face {t:?} flipped");
-    }
+    assert_closer_and_unflipped(&level, &polished, &before, &after, 0.8);
 }
 
 /// The same bits with one thread and with four. Fails if the pairs were
@@ -188,21 +200,5 @@ fn clusters_polish_is_closer_and_deterministic() {
             .unwrap()
     };
     let (before, after) = (err(&level), err(&polished));
-    assert!(
-        after.rms() < 0.85 * before.rms(),
-        "RMS {} -> {}",
-        before.rms_percent(),
-        after.rms_percent()
-    );
-    assert!(
-        after.hausdorff() <= before.hausdorff() * 1.02,
-        "Hausdorff {} -> {}",
-        before.hausdorff_percent(),
-        after.hausdorff_percent()
-    );
-    for &t in &level.triangles {
-        let (a, b) = (normal(&level, t), normal(&polished, t));
-        let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
-        assert!(dot > 0.0, "face {t:?} flipped");
-    }
+    assert_closer_and_unflipped(&level, &polished, &before, &after, 0.85);
 }

@@ -404,6 +404,22 @@ fn output_is_deterministic() {
     assert_eq!(a.pm, b.pm);
 }
 
+/// One run of `opts` to 2 %; the Hausdorff distance (% of the diagonal)
+/// between `m` and its level of half its triangles.
+fn half_level_hausdorff_percent(m: &Mesh, opts: SimplifyOptions) -> f64 {
+    let out = run(m, opts.with_target_ratio(0.02));
+    let mut c = out.pm.cursor();
+    c.seek(out.pm.splits_for_triangles(m.triangles.len() / 2));
+    let level = c.mesh();
+    let e = lodgen_pm::metric::measure(
+        lodgen_pm::metric::MeshRef::new(&m.positions, &m.triangles),
+        lodgen_pm::metric::MeshRef::new(&level.positions, &level.triangles),
+        &lodgen_pm::metric::MeasureOptions::DEFAULT,
+    )
+    .expect("measurable");
+    e.hausdorff_percent()
+}
+
 /// The cow's tail tip: its faces are nearly parallel to the way the tip
 /// moves, so the quadric cost of pulling the tip in is small and the
 /// plain pass run cuts it short at 50 % (Hausdorff 0.56 % of the diagonal,
@@ -417,19 +433,7 @@ fn reach_keeps_the_cow_tail_tip() {
     let Some(m) = common::shared_mesh("cow.obj") else {
         return;
     };
-    let half = |opts: SimplifyOptions| {
-        let out = run(&m, opts.with_target_ratio(0.02));
-        let mut c = out.pm.cursor();
-        c.seek(out.pm.splits_for_triangles(m.triangles.len() / 2));
-        let level = c.mesh();
-        let e = lodgen_pm::metric::measure(
-            lodgen_pm::metric::MeshRef::new(&m.positions, &m.triangles),
-            lodgen_pm::metric::MeshRef::new(&level.positions, &level.triangles),
-            &lodgen_pm::metric::MeasureOptions::DEFAULT,
-        )
-        .expect("measurable");
-        e.hausdorff_percent()
-    };
+    let half = |opts: SimplifyOptions| half_level_hausdorff_percent(&m, opts);
     let plain = half(SimplifyOptions::DEFAULT.with_reach(None));
     let reach = half(SimplifyOptions::DEFAULT);
     assert!(
@@ -448,19 +452,7 @@ fn reach_faces_lowers_the_cows_hausdorff_error() {
     let Some(m) = common::shared_mesh("cow.obj") else {
         return;
     };
-    let half = |opts: SimplifyOptions| {
-        let out = run(&m, opts.with_target_ratio(0.02));
-        let mut c = out.pm.cursor();
-        c.seek(out.pm.splits_for_triangles(m.triangles.len() / 2));
-        let level = c.mesh();
-        let e = lodgen_pm::metric::measure(
-            lodgen_pm::metric::MeshRef::new(&m.positions, &m.triangles),
-            lodgen_pm::metric::MeshRef::new(&level.positions, &level.triangles),
-            &lodgen_pm::metric::MeasureOptions::DEFAULT,
-        )
-        .expect("measurable");
-        e.hausdorff_percent()
-    };
+    let half = |opts: SimplifyOptions| half_level_hausdorff_percent(&m, opts);
     let plain = half(SimplifyOptions::DEFAULT);
     let faces = half(
         SimplifyOptions::DEFAULT.with_reach_faces(Some(lodgen_pm::DEFAULT_REACH_FACES_FACTOR)),
