@@ -122,6 +122,20 @@ fn polish_is_the_same_for_any_thread_count() {
     assert_eq!(one, run(4));
 }
 
+/// A welded torus of `n` × `m` × 2 triangles simplified to 10 %: the
+/// result and its full mesh (the original in the log's numbering).
+fn torus_to_a_tenth(n: u32, m: u32) -> (lodgen_pm::Simplified, Mesh) {
+    let (orig, _) = level_of(&torus(1.0, 0.35, n, m), 0.1);
+    let out = simplify(
+        &orig.positions,
+        &orig.indices(),
+        &SimplifyOptions::DEFAULT.with_target_ratio(0.1),
+    )
+    .unwrap();
+    let full = out.pm.mesh_at_splits(out.pm.len());
+    (out, full)
+}
+
 /// Every original vertex's representative is a vertex of the level, a
 /// level vertex its own, and level triangle `t` is original triangle `t`
 /// with its corners replaced by their representatives (what
@@ -130,14 +144,7 @@ fn polish_is_the_same_for_any_thread_count() {
 /// the level are followed.
 #[test]
 fn representatives_map_the_original_onto_the_level() {
-    let (orig, _) = level_of(&torus(1.0, 0.35, 48, 24), 0.1);
-    let out = simplify(
-        &orig.positions,
-        &orig.indices(),
-        &SimplifyOptions::DEFAULT.with_target_ratio(0.1),
-    )
-    .unwrap();
-    let full = out.pm.mesh_at_splits(out.pm.len());
+    let (out, full) = torus_to_a_tenth(48, 24);
     for k in [0, out.pm.len() / 3, out.pm.len() - 1, out.pm.len()] {
         let level = out.pm.mesh_at_splits(k);
         let rep = out.pm.representatives(k);
@@ -165,14 +172,7 @@ fn representatives_map_the_original_onto_the_level() {
 /// the level as it is or moves it away.
 #[test]
 fn clusters_polish_is_closer_and_deterministic() {
-    let (orig, _) = level_of(&torus(1.0, 0.35, 96, 48), 0.1);
-    let out = simplify(
-        &orig.positions,
-        &orig.indices(),
-        &SimplifyOptions::DEFAULT.with_target_ratio(0.1),
-    )
-    .unwrap();
-    let full = out.pm.mesh_at_splits(out.pm.len());
+    let (out, full) = torus_to_a_tenth(96, 48);
     let k = out.pm.splits_for_triangles(full.triangles.len() / 10);
     let level = out.pm.mesh_at_splits(k);
     let rep = out.pm.representatives(k);

@@ -334,10 +334,7 @@ pub fn polish_clusters(
             }
             original.walk(x, s).0 .0
         });
-        let (moved, backed) = apply(&pos, &target, level);
-        stats.moved += moved;
-        stats.backed_off += backed;
-        if moved == 0 {
+        if !apply(&pos, &target, level, &mut stats) {
             break;
         }
     }

@@ -374,10 +374,7 @@ pub fn polish(
         guard(&pos, &mut target, &acc, |_, x| {
             original_bvh.closest_point(x).map_or(0.0, |r| r.0)
         });
-        let (moved, backed) = apply(&pos, &target, level);
-        stats.moved += moved;
-        stats.backed_off += backed;
-        if moved == 0 {
+        if !apply(&pos, &target, level, &mut stats) {
             break;
         }
     }
@@ -592,9 +589,10 @@ fn face_ok(old: &[[f64; 3]], new: &[[f64; 3]], t: [u32; 3]) -> bool {
     l1 > 0.0 && dot(n0, n1) >= MAX_TURN_COS * l0 * l1
 }
 
-/// Moves the level to `target`, backing off around faces that would turn:
-/// returns (vertices moved, moves shortened or undone).
-fn apply(pos: &[[f64; 3]], target: &[[f64; 3]], level: &mut Mesh) -> (usize, usize) {
+/// Moves the level to `target`, backing off around faces that would turn,
+/// and counts the vertices moved and the moves shortened or undone in
+/// `stats`: false when no vertex moved (the iterations stop).
+fn apply(pos: &[[f64; 3]], target: &[[f64; 3]], level: &mut Mesh, stats: &mut PolishStats) -> bool {
     let mut step: Vec<f64> = vec![1.0; pos.len()];
     let mut backed = vec![false; pos.len()];
     let place = |step: &[f64]| -> Vec<[f64; 3]> {
@@ -638,5 +636,7 @@ fn apply(pos: &[[f64; 3]], target: &[[f64; 3]], level: &mut Mesh) -> (usize, usi
             moved += 1;
         }
     }
-    (moved, backed.iter().filter(|&&b| b).count())
+    stats.moved += moved;
+    stats.backed_off += backed.iter().filter(|&&b| b).count();
+    moved > 0
 }
