@@ -6,6 +6,7 @@ use super::{dv, Simplifier};
 use crate::mesh::adjacency::FanLookup;
 use crate::metric::bvh::{closest_point_on_triangle, distance_squared};
 use glam::DVec3;
+use smallvec::SmallVec;
 
 /// The reach test runs only on pairs whose error (the root mean squared
 /// distance to their quadric's planes) squared is at least this share of
@@ -128,36 +129,79 @@ impl Simplifier {
     /// of the same point of the old face). The cheap test ([`over`]) first,
     /// the exact distance for what it leaves open. Reads the closed
     /// one-rings only.
+    ///
+    /// The old fans are read once; a point is tried first against the old
+    /// faces that hold its own old face's edge (a midpoint: those on the
+    /// edge to the same corner; the centroid: its own old face), where it
+    /// nearly always lies, and each edge's midpoint once (two moved faces
+    /// share it). The answer is that of every point against every face.
     pub(super) fn faces_over(&self, v0: u32, v1: u32, p: DVec3, limit: f64) -> bool {
         let v = [v0, v1];
-        let near = |q: DVec3| {
-            self.any_face(v, None, |[a, b, c]| over(a - q, b - q, c - q, limit))
-                || self.any_face(v, None, |[a, b, c]| {
+        // (the points of a moved face are within |p - p_c| / 2 of the old
+        // face's)
+        let moves = v.map(|c| 0.25 * (p - dv(self.pos[c as usize])).length_squared() > limit);
+        if moves == [false; 2] {
+            return false;
+        }
+        // the two old fans' live faces (the shared ones once), and the moved
+        // faces of the fans tested: their old face's index and their two
+        // other corners, in the face's order
+        let mut old: SmallVec<[([u32; 3], [DVec3; 3]); 32]> = SmallVec::new();
+        let mut moved: SmallVec<[(usize, u32, u32, u32); 32]> = SmallVec::new();
+        for (i, &c) in v.iter().enumerate() {
+            for &t in self.vtris.fan(c) {
+                if !self.tri_alive[t as usize] {
+                    continue;
+                }
+                let tri = self.tris[t as usize];
+                let shared = tri.contains(&v[1 - i]);
+                if shared && i == 1 {
+                    continue;
+                }
+                if moves[i] && !shared {
+                    let mut corners = tri.into_iter().filter(|&x| x != c);
+                    if let (Some(y), Some(z)) = (corners.next(), corners.next()) {
+                        moved.push((old.len(), c, y, z));
+                    }
+                }
+                old.push((tri, tri.map(|x| dv(self.pos[x as usize]))));
+            }
+        }
+        // whether `q` is within the limit of the old fans, the faces for
+        // which `first` holds tried first
+        let near = |q: DVec3, first: &dyn Fn(usize, &[u32; 3]) -> bool| {
+            let cheap = |k: usize, ids: &[u32; 3], [a, b, c]: [DVec3; 3], want: bool| {
+                first(k, ids) == want && over(a - q, b - q, c - q, limit)
+            };
+            old.iter()
+                .enumerate()
+                .any(|(k, (ids, f))| cheap(k, ids, *f, true))
+                || old
+                    .iter()
+                    .enumerate()
+                    .any(|(k, (ids, f))| cheap(k, ids, *f, false))
+                || old.iter().any(|(_, [a, b, c])| {
                     let w = |v: DVec3| [v.x, v.y, v.z];
-                    let (q, a, b, c) = (w(q), w(a), w(b), w(c));
+                    let (q, a, b, c) = (w(q), w(*a), w(*b), w(*c));
                     distance_squared(q, closest_point_on_triangle(q, a, b, c)) <= limit
                 })
         };
-        for (i, &c) in v.iter().enumerate() {
-            // (the points of a moved face are within |p - p_c| / 2 of the
-            // old face's)
-            if 0.25 * (p - dv(self.pos[c as usize])).length_squared() <= limit {
-                continue;
-            }
-            for &t in self.vtris.fan(c) {
-                let tri = self.tris[t as usize];
-                if !self.tri_alive[t as usize] || tri.contains(&v[1 - i]) {
+        let mut done: SmallVec<[u32; 32]> = SmallVec::new();
+        for &(k, centre, y, z) in &moved {
+            let (py, pz) = (dv(self.pos[y as usize]), dv(self.pos[z as usize]));
+            for (x, px) in [(y, py), (z, pz)] {
+                if done.contains(&x) {
                     continue;
                 }
-                let mut corners = tri.into_iter().filter(|&x| x != c);
-                let (Some(y), Some(z)) = (corners.next(), corners.next()) else {
-                    continue;
-                };
-                let (y, z) = (dv(self.pos[y as usize]), dv(self.pos[z as usize]));
-                let points = [(p + y) * 0.5, (p + z) * 0.5, (p + y + z) / 3.0];
-                if points.into_iter().any(|q| !near(q)) {
+                done.push(x);
+                // (on the old edge centre–x)
+                let edge = |_: usize, ids: &[u32; 3]| ids.contains(&x) && ids.contains(&centre);
+                if !near((p + px) * 0.5, &edge) {
                     return true;
                 }
+            }
+            if !near((p + py + pz) / 3.0, &|j, _| j == k) {
+                return true;
             }
         }
         false
