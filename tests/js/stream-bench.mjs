@@ -13,7 +13,16 @@
 // loader (coarsest level drawn = first pixel; every level applied and drawn
 // = full detail; the page draws once per task, as a render loop would once
 // per frame, so levels applied in one go share a draw; `--render each`: a
-// draw on every level event). Prints the medians; exit 1 on a failure.
+// draw on every level event). A draw is timed until one pixel is read
+// back (the frame done), without the checks' screenshot. Prints each run,
+// then the medians with their spread (min – max over the runs) and the
+// median of the runs' own full/plain ratios (each progressive run follows
+// its plain run, so the pair shares the machine's load); `--timeline`: each
+// run's loader timeline and where the progressive full-detail time goes past
+// its floor (line lag: the stream's last byte after its floor; then the
+// last chunk's decoding, applying, normals, the final draw), with the
+// main-thread totals of the whole load (coarse parse, decode, apply,
+// normals, draws). Exit 1 on a failure.
 
 import fs from 'node:fs';
 import { bundle, launch, startServer } from './browser.mjs';
@@ -44,7 +53,34 @@ function parseArgs(argv) {
   return o;
 }
 
-const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
+const sorted = (xs) => [...xs].sort((a, b) => a - b);
+// the median (mean of the middle two for an even count), min and max
+const stats = (xs) => {
+  const s = sorted(xs), n = s.length, m = n % 2 ? s[(n - 1) / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
+  return { median: m, min: s[0], max: s[n - 1] };
+};
+const spread = (x, d = 0) => `${x.median.toFixed(d)} (${x.min.toFixed(d)} – ${x.max.toFixed(d)})`;
+
+// Where a progressive run's time went (ms; see the top of this file).
+function breakdown(prog, floorFull) {
+  const at = (what) => { const m = prog.timeline.find((x) => x.what === what); return m ? m.t : NaN; };
+  const full = prog.events[prog.events.length - 1].t;
+  const last = at('stream last bytes');
+  const tl = prog.timeline, k = tl.length;
+  // marks after the last bytes: decoded K, indices K, vertices K, applied K
+  const tail = { decode: NaN, apply: NaN, draw: prog.draws[prog.draws.length - 1].ms };
+  const dec = tl.findIndex((x, i) => i > 0 && x.what.startsWith('decoded ') && x.t >= last);
+  if (dec >= 0) {
+    tail.decode = tl[dec].t - last;
+    const applied = tl.slice(dec).find((x) => x.what.startsWith('applied '));
+    tail.apply = applied ? applied.t - tl[dec].t : NaN;
+  }
+  return {
+    lag: last - floorFull, tail: full - last, tailDecode: tail.decode, tailApply: tail.apply, finalDraw: tail.draw,
+    parse: at('coarse parsed') - at('coarse bytes'), decode: prog.spent.decode, apply: prog.spent.apply,
+    normals: prog.spent.normals, draws: prog.draws.length, drawMs: prog.draws.reduce((a, d) => a + d.ms, 0), marks: k,
+  };
+}
 
 async function main() {
   const o = parseArgs(process.argv.slice(2));
@@ -61,7 +97,9 @@ async function main() {
   const server = await startServer(routes, requests, { bitsPerSecond: o.mbit * 1e6, latencyMs: o.latency });
   const errors = [];
   const browser = await launch(errors);
-  const runs = { plain: [], first: [], full: [], bytes: [] };
+  const runs = { plain: [], first: [], full: [], ratio: [], firstRatio: [], parts: [], plainParts: [] };
+  const floorOf = (bytes) => o.latency + (bytes * 8) / (o.mbit * 1e3);
+  const plainFloor = floorOf(fs.statSync(o.plain).size);
   try {
     const page = browser.page;
     // the page too comes over the slow line (once, before any timing)
@@ -69,34 +107,60 @@ async function main() {
     await page.goto(`${base}/`, { waitUntil: 'load', timeout: 120_000 });
     await page.waitForFunction(() => window.pageReady === true, undefined, { timeout: 120_000 });
     for (let r = 0; r < o.runs; r++) {
-      const plain = await page.evaluate((u) => window.runPlain(u), `${base}/plain.glb`);
+      const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
       requests.length = 0;
-      const prog = await page.evaluate(([u, render]) => window.runProgressive(u, { hash: false, render }), [`${base}/progressive.glb`, o.render]);
+      const prog = await page.evaluate(([u, render]) => window.runProgressive(u, { hash: false, render, pixels: false }), [`${base}/progressive.glb`, o.render]);
       const mine = requests.filter((q) => q.path === '/progressive.glb');
       const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
+      const full = prog.events[prog.events.length - 1].t;
       runs.plain.push(plain.t);
       runs.first.push(prog.firstPixel.t);
-      runs.full.push(prog.events[prog.events.length - 1].t);
-      runs.bytes.push(bytes);
+      runs.full.push(full);
+      runs.ratio.push(full / plain.t);
+      runs.firstRatio.push(prog.firstPixel.t / plain.t);
+      const parts = breakdown(prog, floorOf(prog.fullBytes));
+      runs.parts.push(parts);
+      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs });
       console.log(`run ${r + 1}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive first pixel ` +
-        `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${prog.events[prog.events.length - 1].t.toFixed(0)} ms ` +
-        `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent)`);
-      if (o.timeline) console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
-        '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', '));
+        `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${full.toFixed(0)} ms ` +
+        `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent); full/plain ${(full / plain.t).toFixed(2)}`);
+      if (o.timeline) {
+        console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
+          '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', ') +
+          '; draws: ' + prog.draws.map((d) => `at ${d.t.toFixed(0)} ${d.ms.toFixed(0)} ms`).join(', '));
+        console.log(`  plain: loaded ${(plain.loaded - plainFloor).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms; ` +
+          `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
+          `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)}); whole load: parse ${parts.parse.toFixed(0)}, ` +
+          `decode ${parts.decode.toFixed(0)}, apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
+      }
       if (prog.events[prog.events.length - 1].drawn !== plain.drawn) errors.push(`full detail draws ${prog.events[prog.events.length - 1].drawn} triangles, plain ${plain.drawn}`);
     }
   } finally {
     await browser.close();
     server.close();
   }
+  const med = (f, from = runs.parts) => stats(from.map(f)).median;
   const res = {
     name: o.name, mbit: o.mbit, latencyMs: o.latency, runs: o.runs,
     plainBytes: fs.statSync(o.plain).size, progressiveBytes: fs.statSync(o.progressive).size,
-    plainMs: median(runs.plain), firstPixelMs: median(runs.first), fullDetailMs: median(runs.full),
+    plain: stats(runs.plain), firstPixel: stats(runs.first), fullDetail: stats(runs.full),
+    fullRatio: stats(runs.ratio), firstRatio: stats(runs.firstRatio),
+    // medians over the runs, ms (see breakdown)
+    parts: Object.fromEntries(Object.keys(runs.parts[0]).map((k) => [k, med((p) => p[k])])),
+    plainParts: { lag: med((p) => p.lag, runs.plainParts), draw: med((p) => p.draw, runs.plainParts) },
   };
-  res.firstRatio = res.firstPixelMs / res.plainMs;
-  res.fullRatio = res.fullDetailMs / res.plainMs;
-  console.log(JSON.stringify(res));
+  res.plainMs = res.plain.median;
+  res.firstPixelMs = res.firstPixel.median;
+  res.fullDetailMs = res.fullDetail.median;
+  console.log(`${o.name}, ${o.runs} runs, median (min – max): plain ${spread(res.plain)} ms, first pixel ${spread(res.firstPixel)} ms, ` +
+    `full ${spread(res.fullDetail)} ms; run by run full/plain ${spread(res.fullRatio, 2)}, first/plain ${spread(res.firstRatio, 2)}`);
+  if (o.timeline) {
+    const q = res.parts;
+    console.log(`${o.name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
+      `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}, ` +
+      `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)}); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
+      `decode ${q.decode.toFixed(0)}, apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms`);
+  }
   if (o.json) fs.writeFileSync(o.json, JSON.stringify(res, null, 2));
   const real = errors.filter((e) => !/\(net::ERR_ABORTED\)$/.test(e));
   if (real.length) throw new Error(real.join('; '));

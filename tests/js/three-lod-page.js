@@ -7,6 +7,7 @@ import { MeshoptDecoder } from 'meshoptimizer';
 import GLTFLodExtension from 'three-gltf-extensions/loaders/MSFT_lod/MSFT_lod.js';
 import { loadProgressive, coverageDistance, distanceForCoverage } from '../../crates/lodgen/web/three/index.js';
 
+const t0 = () => performance.now();
 const canvas = document.getElementById('c');
 const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
 renderer.setSize(canvas.width, canvas.height, false);
@@ -28,10 +29,18 @@ function frame(object) {
   return sphere;
 }
 
-// Draw and return what three.js drew.
-function draw() {
+// Draw and return what three.js drew, and how long the draw took (ms,
+// until its pixels are read back). `pixels: false` (the bench) reads back
+// one pixel, enough to wait for the frame, and skips the screenshot's
+// variance, a check's cost that a render loop does not pay.
+function draw(pixels = true) {
+  const start = t0();
   renderer.render(scene, camera);
   const gl = renderer.getContext();
+  if (!pixels) {
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+    return { triangles: renderer.info.render.triangles, variance: NaN, ms: t0() - start };
+  }
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(w * h * 4);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
@@ -42,7 +51,7 @@ function draw() {
     s2 += l * l;
   }
   const n = px.length / 4;
-  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2 };
+  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2, ms: t0() - start };
 }
 
 // FNV-1a 32 over u32 words, little-endian (view.rs index_hash / attribute_hash)
@@ -100,7 +109,6 @@ function clear() {
   for (const o of [...scene.children]) if (!o.isLight) scene.remove(o);
 }
 
-const t0 = () => performance.now();
 
 // Progressive: level events with drawn triangles, hash, pixels; timings.
 // `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
@@ -108,8 +116,11 @@ const t0 = () => performance.now();
 // `render`: 'each' draws on every level event (what the checks compare);
 // 'task' draws once per task as a render loop would per frame (the bench):
 // levels the loader applies in one go, their bytes being in already, share
-// one draw, and each event's time is the draw that showed it.
-window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each' } = {}) => {
+// one draw, and each event's time is the draw that showed it. `pixels`:
+// see draw(). Returns, besides the events, `draws` (each draw's start and
+// ms), the loader's timeline and main-thread `spent` ms, and the bytes a
+// full load needs (`fullBytes`: up to the stream's end).
+window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
@@ -117,12 +128,18 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   scene.add(p.gltf.scene);
   frame(p.gltf.scene);
   // first pixel: the coarse level as GLTFLoader parsed it
-  const first = draw();
+  const draws = [];
+  const timedDraw = () => {
+    const at = t0() - start, d = draw(pixels);
+    draws.push({ t: at, ms: d.ms });
+    return d;
+  };
+  const first = timedDraw();
   const firstPixel = { drawn: first.triangles, variance: first.variance, t: t0() - start };
   const events = [];
   let waiting = [], drawn = Promise.resolve();
   const show = (ev) => {
-    const d = draw();
+    const d = timedDraw();
     const t = t0() - start;
     for (const e of ev) Object.assign(e, { drawn: d.triangles, variance: d.variance, t });
   };
@@ -139,7 +156,8 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   await p.refine(stopAt);
   await drawn;
   if (keep) window.progressive = p;
-  return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized };
+  return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
+    draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength };
 };
 
 // A file whose TEXCOORD_0 is normalized u16 with KHR_texture_transform:
@@ -169,15 +187,16 @@ window.uvRangeCheck = async (url) => {
 };
 
 // Plain GLTFLoader (+ MeshoptDecoder): time until the full mesh is drawn.
-window.runPlain = async (url) => {
+window.runPlain = async (url, { pixels = true } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
   const gltf = await loader.loadAsync(url);
+  const loaded = t0() - start;
   scene.add(gltf.scene);
   frame(gltf.scene);
-  const d = draw();
-  return { drawn: d.triangles, variance: d.variance, t: t0() - start };
+  const d = draw(pixels);
+  return { drawn: d.triangles, variance: d.variance, t: t0() - start, loaded, drawMs: d.ms };
 };
 
 // The same file without the progressive plugin, through three-gltf-extensions'

@@ -1,4 +1,4 @@
-//! `cargo xtask stream-bench [--quick] [--runs N] [--bytes] [--mesh NAME]`: time to first pixel and
+//! `cargo xtask stream-bench [--quick] [--runs N] [--bytes] [--mesh NAME] [--timeline]`: time to first pixel and
 //! to full detail of a progressive file against the plain compressed full
 //! mesh, over a throttled local line (10 Mbit/s, 50 ms latency, set in the
 //! server), in headless Chromium with three.js (`tests/js/stream-bench.mjs`).
@@ -15,8 +15,17 @@
 //! and prints the table the README's Streaming section quotes, with the
 //! stream's bytes against the plain file's and each time's floor (one
 //! latency + the bytes needed at the line rate), and the best ratios those
-//! floors allow (first pixel or full detail floor over the plain floor). `--bytes` writes the files
-//! and prints the stream's bytes per column kind instead (no browser).
+//! floors allow (first pixel or full detail floor over the plain floor).
+//!
+//! Each mesh runs plain and progressive alternately, `--runs N` pairs
+//! (default: the bunny 9, spot 21, bunny-1m 3: a small file's load is
+//! ~100 ms, where the machine's load moves single runs by 50 %); the table
+//! gives medians with their spread (min – max) and the median of the pairs'
+//! own full/plain ratios. `--timeline` prints each run's loader timeline
+//! and where the progressive full-detail time goes past its floor (line
+//! lag, the last chunk's decode and apply, the final draw; main-thread
+//! totals). `--bytes` writes the files and prints the stream's bytes per
+//! column kind instead (no browser).
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -87,16 +96,39 @@ fn line_ms(bytes: usize) -> f64 {
 const MBIT: f64 = 10.0;
 const LATENCY_MS: f64 = 50.0;
 
-/// `--quick`, `--bytes`, `--runs N` (default 3), `--mesh NAME`.
-fn parse_args(args: &[String]) -> Result<(bool, bool, usize, Option<String>)> {
-    let (mut quick, mut bytes_only, mut runs) = (false, false, 3);
+/// Pairs of runs per mesh unless `--runs` says otherwise: enough that the
+/// median of a ~100 ms load holds still on a loaded 2-core machine.
+fn default_runs(mesh: &str) -> usize {
+    match mesh {
+        "spot" => 21,
+        "bunny" => 9,
+        _ => 3,
+    }
+}
+
+struct Args {
+    quick: bool,
+    bytes_only: bool,
+    runs: Option<usize>,
+    mesh: Option<String>,
+    timeline: bool,
+}
+
+/// `--quick`, `--bytes`, `--runs N`, `--mesh NAME`, `--timeline`.
+fn parse_args(args: &[String]) -> Result<Args> {
+    let (mut quick, mut bytes_only, mut runs, mut timeline) = (false, false, None, false);
     let mut mesh = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => quick = true,
             "--bytes" => bytes_only = true,
-            "--runs" => runs = it.next().context("--runs needs a number")?.parse()?,
+            "--timeline" => timeline = true,
+            "--runs" => {
+                let n: usize = it.next().context("--runs needs a number")?.parse()?;
+                anyhow::ensure!(n > 0, "--runs needs at least 1");
+                runs = Some(n);
+            }
             "--mesh" => {
                 let m = it.next().context("--mesh needs bunny, spot or bunny-1m")?;
                 anyhow::ensure!(
@@ -108,11 +140,23 @@ fn parse_args(args: &[String]) -> Result<(bool, bool, usize, Option<String>)> {
             other => bail!("stream-bench: unknown argument {other:?}"),
         }
     }
-    Ok((quick, bytes_only, runs, mesh))
+    Ok(Args {
+        quick,
+        bytes_only,
+        runs,
+        mesh,
+        timeline,
+    })
 }
 
 pub fn run(args: &[String]) -> Result<()> {
-    let (quick, bytes_only, runs, mesh) = parse_args(args)?;
+    let Args {
+        quick,
+        bytes_only,
+        runs,
+        mesh,
+        timeline,
+    } = parse_args(args)?;
     let root = crate::workspace_root();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
@@ -155,13 +199,15 @@ pub fn run(args: &[String]) -> Result<()> {
             continue;
         }
         let json = dir.join(format!("{id}.json"));
+        let n = runs.unwrap_or_else(|| default_runs(id));
         let status = Command::new("node")
             .arg(js.join("stream-bench.mjs"))
             .arg("--progressive")
             .arg(&prog)
             .arg("--plain")
             .arg(&plain)
-            .args(["--name", id, "--runs", &runs.to_string()])
+            .args(["--name", id, "--runs", &n.to_string()])
+            .args(timeline.then_some("--timeline"))
             .args([
                 "--mbit",
                 &MBIT.to_string(),
@@ -191,17 +237,32 @@ pub fn run(args: &[String]) -> Result<()> {
     if bytes_only {
         return Ok(());
     }
+    print_table(&rows, timeline);
+    Ok(())
+}
+
+/// `median (min – max)` of a stats object of stream-bench.mjs, `d` decimals.
+fn spread(v: &serde_json::Value, d: usize) -> String {
+    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    format!("{:.d$} ({:.d$}–{:.d$})", f("median"), f("min"), f("max"))
+}
+
+type Row = (String, serde_json::Value, f64, [f64; 3]);
+
+fn print_table(rows: &[Row], timeline: bool) {
+    println!("\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; plain and progressive alternately, N pairs");
     println!(
-        "\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; median of {runs}"
+        "ms: median (min–max) over the runs; ratios: median (min–max) of each pair's own ratio"
     );
     println!("floors: one latency + the bytes needed at the line rate (plain: the file; first pixel: JSON + coarsest level; full: + stream), no parsing or drawing");
     println!("(floor ratios: the best first/pl and full/pl these bytes allow, floor over the plain floor; first/pl <= 0.1 needs a plain file of at least 9 latencies of bytes)");
     println!(
-        "{:<9} {:>9} {:>12} {:>9} {:>12} {:>13} {:>10} {:>9} {:>11} {:>9} {:>9} {:>9}",
+        "{:<9} {:>3} {:>20} {:>6} {:>8} {:>16} {:>6} {:>20} {:>6} {:>17} {:>7} {:>17} {:>7}",
         "mesh",
+        "N",
         "plain ms",
-        "stream/plain",
         "floor",
+        "str/pl",
         "first px ms",
         "floor",
         "full ms",
@@ -211,23 +272,63 @@ pub fn run(args: &[String]) -> Result<()> {
         "full/pl",
         "(floor)"
     );
-    for (id, r, ratio, [plain, first, full]) in &rows {
-        let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+    for (id, r, ratio, [plain, first, full]) in rows {
         println!(
-            "{:<9} {:>9.0} {:>11.2}× {:>9.0} {:>12.0} {:>13.0} {:>10.0} {:>9.0} {:>10.2}× {:>8.2}× {:>8.2}× {:>8.2}×",
+            "{:<9} {:>3} {:>20} {:>6.0} {:>7.2}× {:>16} {:>6.0} {:>20} {:>6.0} {:>17} {:>6.2}× {:>17} {:>6.2}×",
             id,
-            f("plainMs"),
-            ratio,
+            r["runs"].as_u64().unwrap_or(0),
+            spread(&r["plain"], 0),
             plain,
-            f("firstPixelMs"),
+            ratio,
+            spread(&r["firstPixel"], 0),
             first,
-            f("fullDetailMs"),
+            spread(&r["fullDetail"], 0),
             full,
-            f("firstRatio"),
+            spread(&r["firstRatio"], 2),
             first / plain,
-            f("fullRatio"),
+            spread(&r["fullRatio"], 2),
             full / plain,
         );
     }
-    Ok(())
+    if !timeline {
+        return;
+    }
+    println!("\nwhere the time goes (medians, ms): plain past its floor (loaded, then its draw); progressive full detail past its floor:");
+    println!("line lag (the stream's last byte after its floor), then decoding the last chunk, applying it (+ normals), the final draw;");
+    println!("main-thread totals of the whole progressive load: coarse level parse, decode, apply, normals, draws (count, ms)");
+    println!(
+        "{:<9} {:>8} {:>6} | {:>8} {:>7} {:>7} {:>7} | {:>6} {:>7} {:>6} {:>8} {:>12}",
+        "mesh",
+        "pl late",
+        "pl drw",
+        "line lag",
+        "decode",
+        "apply",
+        "draw",
+        "parse",
+        "decode",
+        "apply",
+        "normals",
+        "draws"
+    );
+    for (id, r, _, _) in rows {
+        let p = |k: &str| r["parts"][k].as_f64().unwrap_or(f64::NAN);
+        let q = |k: &str| r["plainParts"][k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "{:<9} {:>8.0} {:>6.0} | {:>8.0} {:>7.0} {:>7.0} {:>7.0} | {:>6.0} {:>7.0} {:>6.0} {:>8.0} {:>4.0} {:>7.0}",
+            id,
+            q("lag"),
+            q("draw"),
+            p("lag"),
+            p("tailDecode"),
+            p("tailApply"),
+            p("finalDraw"),
+            p("parse"),
+            p("decode"),
+            p("apply"),
+            p("normals"),
+            p("draws"),
+            p("drawMs"),
+        );
+    }
 }

@@ -233,6 +233,9 @@ export class ProgressiveMesh extends EventDispatcher {
     this.geometry = null; // the stream's, once its base is in
     this.t0 = performance.now();
     this.timeline = [];
+    // main-thread ms spent so far: decoding the stream, applying records
+    // (index edits, positions, corner copies), computing normals
+    this.spent = { decode: 0, apply: 0, normals: 0 };
   }
 
   // Once chunk 0 (header + base mesh) is decoded: set up the geometry
@@ -252,6 +255,8 @@ export class ProgressiveMesh extends EventDispatcher {
     // same space as the level's POSITION: normalized i16 grid points
     // (KHR_mesh_quantization, q - s) or floats
     this.quantized = acc.componentType === 5122 && acc.normalized && h.bits === 16;
+    // (setting up the geometry counts as applying)
+    const t = performance.now(), n0 = this.spent.normals;
     const g = new BufferGeometry();
     const Pos = this.quantized ? Int16Array : Float32Array;
     // the index state (vertex ids) and each vertex's position
@@ -274,6 +279,7 @@ export class ProgressiveMesh extends EventDispatcher {
     this.indices.set(d.baseTri, 0);
     this.nt = h.baseTriangles;
     this.finishUpdate(0, 0, 0, h.baseTriangles * 3);
+    this.spent.apply += performance.now() - t - (this.spent.normals - n0);
     if (this.mesh) {
       this.mesh.geometry.dispose();
       this.mesh.geometry = g;
@@ -415,6 +421,13 @@ export class ProgressiveMesh extends EventDispatcher {
   // the positions'),
   // as snorm8 like `--quantize` writes them, into `out` (3 per vertex).
   computeNormals(out) {
+    const t = performance.now();
+    this.sumNormals(out);
+    this.spent.normals += performance.now() - t;
+    return out;
+  }
+
+  sumNormals(out) {
     const d = this.decoder, q = this.vpos, idx = this.indices, n3 = 3 * this.nt;
     const nv = d.header.baseVertices + this.applied;
     const acc = this.normalSums || (this.normalSums = new Float32Array(3 * d.header.totalVertices));
@@ -494,8 +507,10 @@ export class ProgressiveMesh extends EventDispatcher {
   take(bytes) {
     if (!this.received) this.mark("stream first bytes");
     this.received += bytes.length;
-    this.decoder.push(bytes);
     if (this.received === this.streamLength) this.mark("stream last bytes");
+    const t = performance.now();
+    this.decoder.push(bytes);
+    this.spent.decode += performance.now() - t;
     this.fetched = this.decoder.chunksDone;
     this.wake();
   }
@@ -519,8 +534,14 @@ export class ProgressiveMesh extends EventDispatcher {
   // faces in one copy, then their corner edits in order; one update range
   // for the vertices and one for the indices.
   applyTo(k) {
+    if (k <= this.applied) return;
+    const t = performance.now(), n0 = this.spent.normals;
+    this.applyRecords(k);
+    this.spent.apply += performance.now() - t - (this.spent.normals - n0);
+  }
+
+  applyRecords(k) {
     const d = this.decoder, idx = this.indices, cw = this.cw, a = this.applied;
-    if (k <= a) return;
     const f0 = 3 * d.fStart[a], f1 = 3 * d.fStart[k];
     idx.set(d.faces0.subarray(f0, f1), f0);
     if (cw) {
