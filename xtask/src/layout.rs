@@ -4,7 +4,8 @@
 //! [`MAX_FN_LINES`] lines, or files of one crate import each other (a cycle
 //! in the graph of `use crate::…` / `super::…` / `self::…` paths and
 //! relative `use child::…`, each path resolved to the file of the deepest
-//! module it names). A re-export (`pub use child::X` in a `mod.rs` façade)
+//! module it names), or a text file anywhere in the repository still holds
+//! merge-conflict markers ([`crate::markers`]). A re-export (`pub use child::X` in a `mod.rs` façade)
 //! is the module's surface, not an import, unless the file itself uses `X`.
 //!
 //! A small tokenizer (comments, strings, chars and lifetimes told apart)
@@ -31,7 +32,7 @@ pub fn run(args: &[String]) -> Result<()> {
     if problems.is_empty() {
         println!(
             "layout: ok (files ≤ {MAX_FILE_LINES} lines, functions ≤ {MAX_FN_LINES} lines, \
-             no module cycles)"
+             no module cycles, no merge-conflict markers)"
         );
         return Ok(());
     }
@@ -68,6 +69,7 @@ pub fn check_workspace(root: &Path) -> Result<Vec<String>> {
         problems.extend(size_problems(&parsed));
         problems.extend(cycle_problems(&parsed));
     }
+    problems.extend(crate::markers::marker_problems(root)?);
     Ok(problems)
 }
 

@@ -10,6 +10,7 @@ mod e2e;
 mod fuzz;
 mod golden;
 mod layout;
+mod markers;
 mod py_bench;
 mod quality;
 mod render;
@@ -44,7 +45,7 @@ tasks:
                           (peers re-run only where lodgen's triangle count moved; --fresh: all)
 
   layout                  files ≤ 800 lines, functions ≤ 120 lines outside tests, no module cycles
-                          (crates/*/src, xtask/src)
+                          (crates/*/src, xtask/src); no merge-conflict markers in any text file
   attributes [--mesh NAME] [--half-edge] [--reach-off] [--attribute-weights=LIST]
                           UV / normal error of lodgen vs meshopt simplify_with_attributes on a shared
                           mesh (default spot; beetle: its own hard-edged normals)";
