@@ -32,11 +32,14 @@ function frame(object) {
 // Draw and return what three.js drew, and how long the draw took (ms,
 // until its pixels are read back). `pixels: false` (the bench) reads back
 // one pixel, enough to wait for the frame, and skips the screenshot's
-// variance, a check's cost that a render loop does not pay.
+// variance, a check's cost that a render loop does not pay; 'none' reads
+// nothing back (a render loop's frame: the GPU finishes it while the page
+// goes on; ms is the time to submit it).
 function draw(pixels = true) {
   const start = t0();
   renderer.render(scene, camera);
   const gl = renderer.getContext();
+  if (pixels === 'none') return { triangles: renderer.info.render.triangles, variance: NaN, ms: t0() - start };
   if (!pixels) {
     gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
     return { triangles: renderer.info.render.triangles, variance: NaN, ms: t0() - start };
@@ -117,7 +120,11 @@ function clear() {
 // 'task' draws once per task as a render loop would per frame (the bench):
 // levels the loader applies in one go, their bytes being in already, share
 // one draw, and each event's time is the draw that showed it. `pixels`:
-// see draw(). Returns, besides the events, `draws` (each draw's start and
+// see draw(); with `pixels: false` and 'task', the levels before the last
+// are drawn as a render loop draws a frame, not waiting for the GPU (their
+// events' time is when the frame was submitted), and the last level's draw
+// is waited for (one pixel read back; its events' time). Returns, besides
+// the events, `draws` (each draw's start and
 // ms), the loader's timeline and main-thread `spent` ms, and the bytes a
 // full load needs (`fullBytes`: up to the stream's end).
 window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true } = {}) => {
@@ -137,11 +144,14 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   const first = timedDraw();
   const firstPixel = { drawn: first.triangles, variance: first.variance, t: t0() - start };
   const events = [];
-  let waiting = [], drawn = Promise.resolve();
+  let waiting = [], drawn = Promise.resolve(), last = null;
+  const loop = render === 'task' && pixels === false;
   const show = (ev) => {
-    const d = timedDraw();
+    const at = t0() - start, d = draw(loop ? 'none' : pixels);
+    draws.push({ t: at, ms: d.ms });
     const t = t0() - start;
     for (const e of ev) Object.assign(e, { drawn: d.triangles, variance: d.variance, t });
+    last = ev;
   };
   p.addEventListener('level', (e) => {
     // (the hash below is the check's, not the loader's)
@@ -155,6 +165,14 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   });
   await p.refine(stopAt);
   await drawn;
+  if (loop && last) {
+    // the last frame drawn: wait for it
+    const gl = renderer.getContext();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+    const t = t0() - start, d = draws[draws.length - 1];
+    d.ms = t - d.t;
+    for (const e of last) e.t = t;
+  }
   if (keep) window.progressive = p;
   return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
     draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength };
