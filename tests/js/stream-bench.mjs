@@ -108,8 +108,10 @@ async function main() {
     await page.waitForFunction(() => window.pageReady === true, undefined, { timeout: 120_000 });
     for (let r = 0; r < o.runs; r++) {
       const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
+      const plainFrame = await page.evaluate(() => window.frameMs(3));
       requests.length = 0;
       const prog = await page.evaluate(([u, render]) => window.runProgressive(u, { hash: false, render, pixels: false }), [`${base}/progressive.glb`, o.render]);
+      const progFrame = await page.evaluate(() => window.frameMs(3));
       const mine = requests.filter((q) => q.path === '/progressive.glb');
       const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
       const full = prog.events[prog.events.length - 1].t;
@@ -120,7 +122,8 @@ async function main() {
       runs.firstRatio.push(prog.firstPixel.t / plain.t);
       const parts = breakdown(prog, floorOf(prog.fullBytes));
       runs.parts.push(parts);
-      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs });
+      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs, frame: plainFrame });
+      parts.frame = progFrame;
       console.log(`run ${r + 1}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive first pixel ` +
         `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${full.toFixed(0)} ms ` +
         `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent); full/plain ${(full / plain.t).toFixed(2)}`);
@@ -128,7 +131,8 @@ async function main() {
         console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
           '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', ') +
           '; draws: ' + prog.draws.map((d) => `at ${d.t.toFixed(0)} ${d.ms.toFixed(0)} ms`).join(', '));
-        console.log(`  plain: loaded ${(plain.loaded - plainFloor).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms; ` +
+        console.log(`  plain: loaded ${(plain.loaded - plainFloor).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms, then a frame ${plainFrame.toFixed(0)} ms ` +
+          `(progressive at full detail ${progFrame.toFixed(0)} ms); ` +
           `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
           `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)}); whole load: parse ${parts.parse.toFixed(0)}, ` +
           `decode ${parts.decode.toFixed(0)}, apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
@@ -147,7 +151,7 @@ async function main() {
     fullRatio: stats(runs.ratio), firstRatio: stats(runs.firstRatio),
     // medians over the runs, ms (see breakdown)
     parts: Object.fromEntries(Object.keys(runs.parts[0]).map((k) => [k, med((p) => p[k])])),
-    plainParts: { lag: med((p) => p.lag, runs.plainParts), draw: med((p) => p.draw, runs.plainParts) },
+    plainParts: Object.fromEntries(['lag', 'draw', 'frame'].map((k) => [k, med((p) => p[k], runs.plainParts)])),
   };
   res.plainMs = res.plain.median;
   res.firstPixelMs = res.firstPixel.median;
@@ -159,7 +163,8 @@ async function main() {
     console.log(`${o.name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
       `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}, ` +
       `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)}); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
-      `decode ${q.decode.toFixed(0)}, apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms`);
+      `decode ${q.decode.toFixed(0)}, apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms; ` +
+      `a frame once loaded: plain ${res.plainParts.frame.toFixed(0)} ms, progressive ${q.frame.toFixed(0)} ms`);
   }
   if (o.json) fs.writeFileSync(o.json, JSON.stringify(res, null, 2));
   const real = errors.filter((e) => !/\(net::ERR_ABORTED\)$/.test(e));

@@ -204,6 +204,14 @@ window.uvRangeCheck = async (url) => {
     transform: ch && ch.remap, events: r.events.length };
 };
 
+// The scene as it stands drawn `n` more times, each waited for (one pixel
+// read back): the median ms of a frame (the bench, after a load).
+window.frameMs = (n = 3) => {
+  const ms = [];
+  for (let i = 0; i < n; i++) ms.push(draw(false).ms);
+  return ms.sort((x, y) => x - y)[Math.floor(n / 2)];
+};
+
 // Plain GLTFLoader (+ MeshoptDecoder): time until the full mesh is drawn.
 window.runPlain = async (url, { pixels = true } = {}) => {
   clear();

@@ -18,7 +18,8 @@
 // `refine` gives the mesh a BufferGeometry sized for the finest level once
 // the stream's base is in, fetches any chunk still missing in one range
 // request, and applies each level (decoded as its bytes arrive) with update
-// ranges, dispatching a "level" event per level.
+// ranges, dispatching a "level" event per level (a level waits up to
+// `holdMs` for the next ones the line brings by then: one frame for them).
 // `refineForScreen(camera, renderer)` refines to the level the file's
 // MSFT_screencoverage asks for at the object's current size on screen.
 //
@@ -285,7 +286,6 @@ export class ProgressiveMesh extends EventDispatcher {
       this.mesh.geometry = g;
     }
     this.mark("base");
-    this.dispatchEvent({ type: "level", level: this.levels.length - 1, records: 0, triangles: this.nt });
   }
 
   // A point of the load's timeline (this.timeline: {what, t, bytes}; t in
@@ -505,7 +505,10 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 
   take(bytes) {
-    if (!this.received) this.mark("stream first bytes");
+    if (!this.received) {
+      this.mark("stream first bytes");
+      this.since = performance.now(); // for the line's rate (hold)
+    }
     this.received += bytes.length;
     if (this.received === this.streamLength) this.mark("stream last bytes");
     const t = performance.now();
@@ -576,7 +579,12 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 
   // Refine up to MSFT_lod level `level` (finest = 0; default: the finest),
-  // fetching the chunks that hold it; a "level" event per level reached.
+  // fetching the chunks that hold it; a "level" event per level reached
+  // (the first, records 0, once the stream's geometry holds the base).
+  // A level decoded waits, at most `holdMs`, for the next ones whose bytes
+  // the line brings by then (at the rate the stream's bytes have come so
+  // far): they are then applied in one go, an event each, so a render loop
+  // draws them in one frame instead of drawing levels seen for a few ms.
   async refine(level = 0) {
     await this.start();
     const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
@@ -584,14 +592,42 @@ export class ProgressiveMesh extends EventDispatcher {
     const chunkOf = (k) => h.chunks.findIndex((c) => c.records >= k);
     this.request(chunkOf(want));
     const steps = [...new Set(this.levels)].filter((k) => k > this.applied && k <= want).sort((a, b) => a - b);
-    for (const k of steps) {
-      await this.waitChunks(chunkOf(k) + 1);
-      this.mark(`decoded ${k}`);
-      this.applyTo(k);
-      this.mark(`applied ${k}`);
-      this.dispatchEvent({ type: "level", level: this.levels.indexOf(k), records: k, triangles: this.nt });
+    if (!this.baseShown) steps.unshift(0);
+    for (let i = 0; i < steps.length;) {
+      if (steps[i] > 0) {
+        await this.waitChunks(chunkOf(steps[i]) + 1);
+        this.mark(`decoded ${steps[i]}`);
+      }
+      const deadline = performance.now() + this.holdMs;
+      let j = i + 1;
+      while (j < steps.length && (await this.hold(chunkOf(steps[j]) + 1, deadline))) this.mark(`decoded ${steps[j++]}`);
+      for (; i < j; i++) {
+        const k = steps[i];
+        if (k > 0) {
+          this.applyTo(k);
+          this.mark(`applied ${k}`);
+        }
+        this.baseShown = true;
+        this.dispatchEvent({ type: "level", level: k > 0 ? this.levels.indexOf(k) : this.levels.length - 1, records: k, triangles: this.nt });
+      }
     }
     return this.level();
+  }
+
+  // Whether the first `n` chunks are decoded, now or by `deadline` (ms,
+  // performance.now()): waited for when they are asked for and the rate
+  // the stream's bytes have come at so far brings them by then.
+  async hold(n, deadline) {
+    if (this.decoder.chunksDone >= n) return true;
+    const left = deadline - performance.now();
+    if (!(left > 0) || n > this.requested || !this.since) return false;
+    const elapsed = performance.now() - this.since, need = this.chunkEnds[n - 1] - this.received;
+    if (!(elapsed > 0) || need * elapsed > left * this.received) return false;
+    this.mark(`hold for ${need} B`);
+    let timer;
+    await Promise.race([this.waitChunks(n), new Promise((r) => { timer = setTimeout(r, left); })]);
+    clearTimeout(timer);
+    return this.decoder.chunksDone >= n;
   }
 
   // Refine to the level MSFT_screencoverage asks for at the mesh's current
@@ -620,12 +656,16 @@ export class ProgressiveMesh extends EventDispatcher {
 // EXT_meshopt_compression), `meshoptDecoder` (awaited `.ready`),
 // `fetchOptions` (passed to fetch), `prefetch` (a level, 0 = finest: request
 // the stream up to it right away, in parallel with the coarse level, when
-// you will refine to it anyway). Resolves, with the ProgressiveMesh, as soon
+// you will refine to it anyway), `holdMs` (default 50; 0: every level on
+// its own as soon as it is decoded): a level decoded waits up to that many
+// ms for the next ones the line brings by then, all applied in one go (see
+// refine).
+// Resolves, with the ProgressiveMesh, as soon
 // as the coarsest level is parsed (`.gltf`: draw it); `refine` swaps in the
 // stream's geometry once its base chunk is in ("level" event, records 0).
 // A file without the extension is loaded whole by `loader` (`.gltf` set,
 // nothing to refine).
-export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch }) {
+export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch, holdMs = 50 }) {
   const t0 = performance.now();
   await meshoptDecoder.ready;
   // one request from the start of the file: lodgen writes the JSON, the
@@ -650,6 +690,7 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   const hi = meshRange(json, found.mesh)[1], lo = 0;
   const bin = new Uint8Array(binLength);
   const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found });
+  p.holdMs = holdMs;
   p.t0 = t0;
   p.mark("json");
   const wantRecords = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
