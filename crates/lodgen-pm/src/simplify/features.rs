@@ -6,8 +6,9 @@
 //! appearance attributes") is a caller's attribute id at a corner: a UV seam
 //! or a hard edge is two wedges at one position. An edge is a *feature edge*
 //! when the wedges differ across it at either end, when the caller says so
-//! (`Simplifier::set_feature_edges`), or, once features are on, when it is
-//! an open border.
+//! (`Simplifier::set_feature_edges`), or, once features are on (a seam or a
+//! caller's feature edge), when it is an open border. Wedges without a seam
+//! (one per vertex) turn no feature on.
 //!
 //! Vertices are classified by their number of feature edges, as in
 //! meshoptimizer's `kCanCollapse` (manifold / border / seam / locked):

@@ -285,9 +285,10 @@ impl Simplifier {
     /// Track a wedge (the caller's attribute id, e.g. its unwelded vertex
     /// index) at every triangle corner, `wedges[t][k]` for corner `k` of
     /// triangle `t` of the mesh given to `new`. Edges across which the
-    /// wedges differ become feature edges (seams); the log records every
-    /// corner's wedge (`ProgressiveMesh::wedges`). Call before the first
-    /// `step`. Panics if the length is not the triangle count (a
+    /// wedges differ become feature edges (seams), and then open borders
+    /// too; without a seam borders stay plain borders, as without wedges.
+    /// The log records every corner's wedge (`ProgressiveMesh::wedges`).
+    /// Call before the first `step`. Panics if the length is not the triangle count (a
     /// programming error, not input).
     pub fn set_wedges(&mut self, wedges: Vec<[u32; 3]>) {
         assert_eq!(
@@ -296,11 +297,23 @@ impl Simplifier {
             "one wedge triple per triangle"
         );
         let vertex_wedge = features::vertex_wedges(&self.tris, &wedges);
-        let seams = match vertex_wedge {
-            Some(_) => Vec::new(),
-            None => self.seam_edges(&wedges),
-        };
-        self.add_features(&seams);
+        match vertex_wedge {
+            // no seam (positions only): wedges are tracked, but no feature
+            // line is made, so open borders stay what they are without
+            // wedges (constraint planes, optimal placement, corners
+            // pinned), not feature lines their vertices may only slide
+            // along (beetle at 41 triangles: Hausdorff 14.6 % instead of
+            // `simplify`'s 6.1 %)
+            Some(_) => {
+                if self.features.is_none() {
+                    self.features = Some(Features::with_borders(self.pos.len(), &[]));
+                }
+            }
+            None => {
+                let seams = self.seam_edges(&wedges);
+                self.add_features(&seams);
+            }
+        }
         // one wedge per vertex and no attribute term (which reads corner
         // wedges): the corners' wedges follow from the vertices'
         let implied = vertex_wedge.is_some() && self.attributes.is_none();
