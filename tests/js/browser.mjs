@@ -71,8 +71,10 @@ export async function launch(pageErrors, { viewport = { width: 640, height: 480 
  * slices at `bitsPerSecond` (a client reading the body as it arrives sees
  * the bytes come in), responses sharing the link one after another (as on
  * one slow line); a response the client closes early stops there and frees
- * the line. Each request is logged into `requests`, with `sent`: the body
- * bytes written before the end or the client's close.
+ * the line. A route's own `throttle` applies to it instead (routes without
+ * one are then sent at once when `throttle` is null). Each request is
+ * logged into `requests`, with `sent`: the body bytes written before the end
+ * or the client's close.
  */
 export function startServer(routes, requests = [], throttle = null) {
   const queue = []; // throttled responses waiting for the line
@@ -81,7 +83,7 @@ export function startServer(routes, requests = [], throttle = null) {
   const serveNext = () => {
     if (busy || !queue.length) return;
     busy = true;
-    const { res, status, headers, body, log, ready } = queue.shift();
+    const { res, status, headers, body, log, ready, line } = queue.shift();
     let closed = false;
     res.on('close', () => { closed = true; });
     const begin = () => {
@@ -102,19 +104,19 @@ export function startServer(routes, requests = [], throttle = null) {
         pos += n;
         log.sent = pos;
         // the slice's last byte leaves the line at t0 + pos bits / rate
-        setTimeout(step, Math.max(0, t0 + (pos * 8 * 1000) / throttle.bitsPerSecond - Date.now()));
+        setTimeout(step, Math.max(0, t0 + (pos * 8 * 1000) / line.bitsPerSecond - Date.now()));
       };
       step();
     };
     setTimeout(begin, Math.max(0, ready - Date.now()));
   };
-  const send = (res, status, headers, body, log) => {
-    if (!throttle) {
+  const send = (res, status, headers, body, log, line) => {
+    if (!line) {
       log.sent = body ? body.length : 0;
       res.writeHead(status, headers).end(body);
       return;
     }
-    queue.push({ res, status, headers, body, log, ready: Date.now() + throttle.latencyMs });
+    queue.push({ res, status, headers, body, log, line, ready: Date.now() + line.latencyMs });
     serveNext();
   };
   const server = http.createServer((req, res) => {
@@ -147,11 +149,11 @@ export function startServer(routes, requests = [], throttle = null) {
       }
       log.status = 206;
       const part = req.method === 'HEAD' ? undefined : body.subarray(start, end + 1);
-      send(res, 206, { ...headers, 'Content-Range': `bytes ${start}-${end}/${body.length}`, 'Content-Length': end - start + 1 }, part, log);
+      send(res, 206, { ...headers, 'Content-Range': `bytes ${start}-${end}/${body.length}`, 'Content-Length': end - start + 1 }, part, log, route.throttle || throttle);
       return;
     }
     log.status = 200;
-    send(res, 200, { ...headers, 'Content-Length': body.length }, req.method === 'HEAD' ? undefined : body, log);
+    send(res, 200, { ...headers, 'Content-Length': body.length }, req.method === 'HEAD' ? undefined : body, log, route.throttle || throttle);
   });
   return new Promise((resolve, reject) => {
     server.once('error', reject);

@@ -115,7 +115,8 @@ function clear() {
 
 // Progressive: level events with drawn triangles, hash, pixels; timings.
 // `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
-// passed: the stream beyond its base is fetched when `refine` asks).
+// passed: the stream beyond its base is fetched when `refine` asks);
+// `holdMs` too (undefined: the loader's default).
 // `render`: 'each' draws on every level event (what the checks compare);
 // 'task' draws once per task as a render loop would per frame (the bench):
 // levels the loader applies in one go, their bytes being in already, share
@@ -127,11 +128,11 @@ function clear() {
 // the events, `draws` (each draw's start and
 // ms), the loader's timeline and main-thread `spent` ms, and the bytes a
 // full load needs (`fullBytes`: up to the stream's end).
-window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true } = {}) => {
+window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
-  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: prefetch === 'none' ? undefined : prefetch });
+  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: prefetch === 'none' ? undefined : prefetch, holdMs });
   scene.add(p.gltf.scene);
   frame(p.gltf.scene);
   // first pixel: the coarse level as GLTFLoader parsed it

@@ -13,7 +13,10 @@
 // coarsest level; the GLB is read from its start in one request (JSON,
 // coarsest level, stream); stopping at a middle level without prefetch reads
 // the stream's base on that request, the rest up to the level by one range
-// request, and fewer stream bytes; screenshots of the coarsest and finest level are
+// request, and fewer stream bytes; over a throttled line (50 Mbit/s) that
+// brings the whole stream well within `holdMs: 1000`, every level (the
+// base's included) is applied in one go: the page, drawing once per task,
+// shows them all in one draw; screenshots of the coarsest and finest level are
 // not blank (DIR/three-*.png, default target/test-out). The same file without
 // the progressive plugin, through three-gltf-extensions' MSFT_lod plugin with
 // the coverageDistance hook, is a THREE.LOD with every level (its triangle
@@ -76,6 +79,7 @@ async function main() {
       body: await bundle('three-lod-page.js', ['../../crates/lodgen/web/three/index.js', '../../crates/lodgen/web/three/lgpm.js']),
     },
     '/model.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]) },
+    '/slow.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]), throttle: { bitsPerSecond: 50e6, latencyMs: 5 } },
     ...(o.attributes ? { '/attributes.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.attributes) } } : {}),
     ...(o.uvRange ? { '/uvrange.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.uvRange) } } : {}),
   };
@@ -113,6 +117,15 @@ async function main() {
       const file = path.join(o.out, `three-progressive-${i === 0 ? 'coarsest' : 'finest'}.png`);
       check(e.variance > MIN_VARIANCE, `progressive ${i === 0 ? 'coarsest' : 'finest'} level not blank: variance ${e.variance.toFixed(1)}`);
       if (i !== 0) await page.screenshot({ path: file });
+    }
+
+    // levels the line brings within holdMs share one frame
+    {
+      const h = await page.evaluate(() => window.runProgressive('/slow.glb', { hash: false, render: 'task', holdMs: 1000 }));
+      const draws = new Set(h.events.map((e) => e.t)).size;
+      check(h.events.length === levels.length && draws === 1 && h.events[h.events.length - 1].drawn === levels[0].triangles,
+        `holdMs 1000 on a 50 Mbit/s line: ${h.events.length} level events in ${draws} draw(s) (expected ${levels.length} in 1), ` +
+          `finest ${h.events[h.events.length - 1].drawn} triangles`);
     }
 
     // stop at a middle level, the stream beyond its base asked for only by
