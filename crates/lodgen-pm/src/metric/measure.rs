@@ -25,6 +25,9 @@
 //! chunk's sums are computed sequentially and the chunk results are folded in index order. The
 //! result is therefore bit-identical whatever the number of rayon threads.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use rayon::prelude::*;
 use thiserror::Error;
 
 use super::bounded::{bounded_max, Tolerance};
@@ -209,7 +212,8 @@ impl<'a> Reference<'a> {
             mesh: a,
             bvh: self.bvh.renumbered(triangle_new)?,
             samples: self.samples.renumbered(vertex_new)?,
-            diagonal: a.bbox_diagonal(),
+            // (the same positions under the same triangles: the same box)
+            diagonal: self.diagonal,
         })
     }
 
@@ -306,25 +310,25 @@ fn is_renumbering(
     {
         return false;
     }
+    // (in parallel: the numberings scatter every read over both meshes; the
+    // answer does not depend on the order the entries are checked in)
     let bits = |p: [f32; 3]| p.map(f32::to_bits);
-    let mut seen = vec![false; nv];
-    for (v, &n) in vertex_new.iter().enumerate() {
+    let seen: Vec<AtomicBool> = (0..nv).map(|_| AtomicBool::new(false)).collect();
+    let vertices_ok = vertex_new.par_iter().enumerate().all(|(v, &n)| {
         let n = n as usize;
-        if n >= nv || seen[n] || bits(b.positions[n]) != bits(a.positions[v]) {
-            return false;
-        }
-        seen[n] = true;
+        n < nv
+            && !seen[n].swap(true, Ordering::Relaxed)
+            && bits(b.positions[n]) == bits(a.positions[v])
+    });
+    if !vertices_ok {
+        return false;
     }
-    let mut seen = vec![false; nt];
-    for (t, &n) in triangle_new.iter().enumerate() {
+    let seen: Vec<AtomicBool> = (0..nt).map(|_| AtomicBool::new(false)).collect();
+    triangle_new.par_iter().enumerate().all(|(t, &n)| {
         let n = n as usize;
         let corners = a.triangles[t].map(|v| vertex_new.get(v as usize).copied());
-        if n >= nt || seen[n] || corners != b.triangles[n].map(Some) {
-            return false;
-        }
-        seen[n] = true;
-    }
-    true
+        n < nt && !seen[n].swap(true, Ordering::Relaxed) && corners == b.triangles[n].map(Some)
+    })
 }
 
 /// One-sided distance from the points of `from` to the surface in `to`, with

@@ -20,6 +20,7 @@ use super::fit::FitSource;
 use super::flat::{flatten, Flat};
 use super::measure::Measurer;
 use super::options::{BuildOptions, LevelRequest, Progress};
+use super::reference::{inverse, measurer_in_input_order, Origins};
 use super::select::select_splits;
 use super::wedges::{prepare_wedged, simplify_wedged, simplify_wedged_beside};
 
@@ -293,16 +294,16 @@ fn build_mesh(
     let simplify_time = t_build.elapsed();
     return_freed_memory(input_triangles);
     let pm = &simplified.pm;
-    let full = pm.mesh_at_splits(pm.len());
+    let mut full = pm.mesh_at_splits(pm.len());
     // (a mesh whose input was freed and whose levels then fail is written
     // as its welded input: the input is rebuilt from `full`)
     macro_rules! or_restore {
-        ($e:expr) => {
+        ($e:expr, $full:expr) => {
             match $e {
                 Ok(x) => x,
                 Err(e) => {
                     if freed {
-                        restore_input(mesh, &full);
+                        restore_input(mesh, $full);
                     }
                     return Err(e);
                 }
@@ -321,16 +322,11 @@ fn build_mesh(
             of,
         })
     };
-    let (splits, notes) = or_restore!(select_splits(pm, opts, &measurer, &mut measuring));
-    let extracted = or_restore!(extract_all(
-        mesh,
-        &flat,
-        &simplified,
-        &splits,
-        opts,
-        &measurer,
-        (side_by_side, freed)
-    ));
+    let selected = select_splits(pm, opts, &measurer, &mut measuring);
+    let (splits, notes) = or_restore!(selected, &full);
+    let what = (side_by_side, freed);
+    let extracted = extract_all(mesh, &flat, &simplified, &splits, opts, &measurer, what);
+    let extracted = or_restore!(extracted, &full);
     drop(flat);
     if let (false, Cow::Owned(m)) = (opts.keep_input, &mut *mesh) {
         if measurable(&full, &extracted) {
@@ -340,22 +336,25 @@ fn build_mesh(
             }
         }
     }
-    if !opts.keep_progressive {
-        // the levels are out: the sequence is not needed while the
-        // original's hierarchy is built and the levels measured
-        simplified.pm = ProgressiveMesh::default();
-        simplified.vertex_map = Vec::new();
-        simplified.triangle_map = Vec::new();
-    }
-    let (lod_levels, errors) = or_restore!(measure_levels(
+    let coherent = measured_in_input_order(opts, side_by_side, &extracted);
+    let (full, measurer) = match free_sequence(&mut simplified, opts.keep_progressive, coherent) {
+        Some(origins) => {
+            drop(measurer);
+            measurer_in_input_order(&mut full, origins, (index, &name))
+        }
+        None => (&full, measurer),
+    };
+    let mopts = &opts.measure;
+    let measured = measure_levels(
         extracted,
-        &full,
+        full,
         &splits,
-        &opts.measure,
+        mopts,
         &measurer,
         side_by_side,
         &mut measuring,
-    ));
+    );
+    let (lod_levels, errors) = or_restore!(measured, full);
     let measure_time = measurer.time();
     drop(measurer);
     Ok(MeshBuild {
@@ -376,6 +375,40 @@ fn build_mesh(
         },
         notes,
     })
+}
+
+/// Whether the original's hierarchy is built over its welded input's
+/// numbering ([`measurer_in_input_order`]): a large mesh (the small ones'
+/// is built beside the simplification) whose levels are measured, by count
+/// or ratio (nothing is measured before the levels are out), unpolished
+/// (the polish builds its own), with a level to measure.
+fn measured_in_input_order(opts: &BuildOptions, side_by_side: bool, levels: &[Extracted]) -> bool {
+    !side_by_side
+        && opts.measured
+        && opts.polish.is_none()
+        && matches!(opts.levels, LevelRequest::Specs(_))
+        && levels.iter().any(|e| e.mesh.is_some())
+}
+
+/// Frees the progressive mesh and the preparation's maps once the levels
+/// are out (the sequence is not needed while the original's hierarchy is
+/// built and the levels measured), unless `keep_progressive`; returns the
+/// sequence's origin maps and length when `keep_origins`.
+fn free_sequence(
+    simplified: &mut Simplified,
+    keep_progressive: bool,
+    keep_origins: bool,
+) -> Option<Origins> {
+    let pm = &simplified.pm;
+    let splits = pm.len();
+    if keep_progressive {
+        let maps = (pm.vertex_origin.clone(), pm.triangle_origin.clone());
+        return keep_origins.then_some((maps.0, maps.1, splits));
+    }
+    let pm = std::mem::take(&mut simplified.pm);
+    simplified.vertex_map = Vec::new();
+    simplified.triangle_map = Vec::new();
+    keep_origins.then_some((pm.vertex_origin, pm.triangle_origin, splits))
 }
 
 /// Every level extracted ([`extract_levels`]): polished first with
@@ -486,15 +519,6 @@ impl Early<'_> {
         pm: &ProgressiveMesh,
         full: &'f Mesh,
     ) -> Option<(Reference<'f>, Duration)> {
-        let inverse = |origin: &[u32]| {
-            let mut new = vec![u32::MAX; origin.len()];
-            for (i, &o) in origin.iter().enumerate() {
-                if let Some(n) = new.get_mut(o as usize) {
-                    *n = i as u32;
-                }
-            }
-            new
-        };
         let r = self.reference.ok()?.renumbered(
             MeshRef::new(&full.positions, &full.triangles),
             &inverse(&pm.vertex_origin),

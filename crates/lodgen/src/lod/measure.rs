@@ -72,6 +72,28 @@ impl<'a> Measurer<'a> {
         }
     }
 
+    /// [`Self::new`] for levels that are measured, made without the
+    /// progressive mesh (which may be freed by then): `splits` is its
+    /// length.
+    pub(super) fn measured(
+        splits: usize,
+        full: &'a Mesh,
+        index: usize,
+        name: &'a str,
+    ) -> Measurer<'a> {
+        Measurer {
+            full,
+            splits,
+            estimates: Vec::new(),
+            measured: true,
+            diagonal: full.diagonal(),
+            reference: OnceLock::new(),
+            time: Mutex::new(Duration::ZERO),
+            index,
+            name,
+        }
+    }
+
     /// The original's hierarchy, built at the first call.
     fn reference(&self) -> Result<&Reference<'a>, BuildError> {
         if let Some(r) = self.reference.get() {

@@ -30,7 +30,8 @@
 //! # Files
 //! `options` (what to build) → `build` (the driver) over `flat` (the
 //! flattened input), `wedges` (wedges, attribute cost, QEM on wedges),
-//! `measure` (a level's error), `select` (split count per level), `fit`
+//! `measure` (a level's error), `reference` (a large original's hierarchy
+//! built in the welded input's numbering), `select` (split count per level), `fit`
 //! (per-level attribute fit), `extract` (level → primitives) and `unit`
 //! (normals, tangents, weights made valid); `stream` (attributes for the
 //! `LODGEN_progressive` stream); `error`.
@@ -42,6 +43,7 @@ mod fit;
 mod flat;
 mod measure;
 mod options;
+mod reference;
 mod select;
 mod stream;
 mod unit;
