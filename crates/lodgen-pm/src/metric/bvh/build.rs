@@ -117,7 +117,11 @@ struct Range {
 /// minima and maxima), and a smaller one by building its binary subtree alone. The work list
 /// is a stack, as in the collapse, so a subtree is numbered whole once its root is taken.
 pub(super) fn wide_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3]) -> Wide {
-    wide_tree_in(codes, corners, CHUNK)
+    let mut wide = wide_tree_in(codes, corners, CHUNK);
+    for n in &mut wide.nodes {
+        n.set_masks();
+    }
+    wide
 }
 
 /// [`wide_tree`] with chunks of at most `chunk` triangles.
@@ -272,6 +276,8 @@ const BLANK: Node = Node {
     first: [0; 4],
     count: [EMPTY; 4],
     parent: NO_NODE,
+    present: 0,
+    leaves: 0,
 };
 
 /// Collapses the binary tree `build` (internal root) into 4-wide query nodes appended to

@@ -28,6 +28,20 @@ pub(super) struct Node {
     /// The node this one is a child of ([`NO_NODE`] for the root), for searches upwards from a
     /// hint (in what would be padding: the node stays 128 bytes).
     pub(super) parent: u32,
+    /// Bit `c` set when child `c` exists ([`Node::set_masks`], from `count`; padding too).
+    pub(super) present: u8,
+    /// Bit `c` set when child `c` is a leaf.
+    pub(super) leaves: u8,
+}
+
+impl Node {
+    /// Sets [`Node::present`] and [`Node::leaves`] from `count`.
+    pub(super) fn set_masks(&mut self) {
+        let bits =
+            |f: &dyn Fn(u8) -> bool| (0..4).fold(0u8, |m, c| m | u8::from(f(self.count[c])) << c);
+        self.present = bits(&|n| n != EMPTY);
+        self.leaves = bits(&|n| n != EMPTY && n != 0);
+    }
 }
 
 /// `f32::min` without its NaN handling (positions are validated finite): one instruction.
