@@ -670,7 +670,8 @@ fn reach_lowers_the_cows_hausdorff_error() {
 
 /// `--reach-faces` reaches the simplifier: the cow's 50 % level differs
 /// from the default's; without a value the factor is
-/// `DEFAULT_REACH_FACES_FACTOR`; a factor that is not positive is refused.
+/// `DEFAULT_REACH_FACES_FACTOR`; "off" is the default; a factor that is
+/// not positive, or a word other than "off", is refused.
 #[test]
 fn reach_faces_flag_reaches_the_simplifier() {
     let Some(input) = lodgen::assets::shared_asset("cow.obj") else {
@@ -683,12 +684,14 @@ fn reach_faces_flag_reaches_the_simplifier() {
     let flag = run(&["--reach-faces"], "flag");
     let factor = lodgen_pm::DEFAULT_REACH_FACES_FACTOR.to_string();
     let with_factor = run(&["--reach-faces", &factor], "factor");
+    let off = run(&["--reach-faces", "off"], "off");
     assert_ne!(plain, flag, "--reach-faces changed nothing");
+    assert_eq!(plain, off, "the default is not --reach-faces off");
     assert_eq!(
         flag, with_factor,
         "--reach-faces is not --reach-faces {factor}"
     );
-    for bad in ["0", "-1"] {
+    for bad in ["0", "-1", "on"] {
         let o = lodgen(&[input.to_str().unwrap(), "--reach-faces", bad]);
         assert!(!o.status.success(), "--reach-faces {bad} accepted");
         assert!(stderr(&o).contains("--reach-faces"), "{}", stderr(&o));

@@ -113,13 +113,14 @@ pub const DEFAULT_CLUSTER_TRIANGLES: usize = 16_384;
 /// 1.38 %, fandisk 2 % 0.32 → 0.33 %, beetle 50 % 0.61 → 0.64 %.
 pub const DEFAULT_REACH_FACTOR: f64 = 1.1;
 
-/// The factor of [`SimplifyOptions::reach_faces`] that `cargo xtask quality
-/// --quick --reach-faces` measures (session 17, docs/quality.md "The new
-/// faces' reach"): geometric mean of lodgen / best peer over 20 cells
-/// Hausdorff 0.922 → 0.886 at 1.2 (0.880 at 0.8, 0.909 at 1, 0.941 at 1.5,
-/// 0.922 at 2), RMS 0.948 → 0.940; with `--polish` 0.880 → 0.828 and
-/// 0.766 → 0.761. Worse at 1.2: bunny 2 % 0.517 → 0.721 %, spot 2 % 3.46 →
-/// 3.73 %; at 0.8 also teapot 2 % 2.08 → 4.61 %, cow 2 % 5.90 → 7.01 %.
+/// The factor of [`SimplifyOptions::reach_faces`] (its default). Measured
+/// by `cargo xtask quality --quick --reach-faces` (session 17, the test in
+/// every pass, docs/quality.md "The new faces' reach"): geometric mean of
+/// lodgen / best peer over 20 cells Hausdorff 0.922 → 0.886 at 1.2 (0.880
+/// at 0.8, 0.909 at 1, 0.941 at 1.5, 0.922 at 2), RMS 0.948 → 0.940; at
+/// 0.8 teapot 2 % 2.08 → 4.61 %, cow 2 % 5.90 → 7.01 %. Since session 18
+/// (midpoints only, the test only while a tenth of the input lives): over
+/// 21 cells 0.910 / 0.933 → 0.874 / 0.928, but bunny 2 % 0.517 → 0.706 %.
 pub const DEFAULT_REACH_FACES_FACTOR: f64 = 1.2;
 
 /// The pair-distance threshold τ of GH97 (non-edge pairs closer than τ may
@@ -188,16 +189,18 @@ pub struct SimplifyOptions {
     pub reach: Option<f64>,
     /// With [`SimplifyOptions::reach`] on, a pass also defers a pair one
     /// of whose new faces leaves the old surface farther than this factor
-    /// × the reach distance: the midpoints of the moved faces' edges from
-    /// the merged vertex, and their centroids, against the two old fans
-    /// (reach tests vertices only, so a new face can bridge a dent or cut
-    /// a bump between vertices that stay close). Off by default (`None`):
-    /// it lowers the Hausdorff distance of most 50 % and 10 % levels
-    /// (bunny 10 % 0.246 → 0.187 %, spot 10 % 0.963 → 0.915 %, cow 50 %
-    /// 0.266 → 0.204 %) but raises some 2 % ones (bunny 2 % 0.517 →
-    /// 0.721 %), and it costs ≈ 50 % more CPU on the bunny's CLI run (more
-    /// deferrals, more passes; docs/quality.md). Suggested value:
-    /// [`DEFAULT_REACH_FACES_FACTOR`].
+    /// × the reach distance: the midpoints of the new edges (from the
+    /// merged vertex) against the two old fans (reach tests vertices only,
+    /// so a new face can bridge a dent or cut a bump between vertices that
+    /// stay close), while at least a tenth of the input's triangles live
+    /// (below, the long new edges would change the last passes more than
+    /// they keep the surface). Off by default (`None`; suggested value
+    /// [`DEFAULT_REACH_FACES_FACTOR`]): it lowers the Hausdorff distance
+    /// of most 50 % and 10 % levels (positions only: bunny 10 % 0.246 →
+    /// 0.187 %, cow 50 % 0.266 → 0.204 %, beetle 50 % 0.650 → 0.413 %,
+    /// spot 10 % 0.963 → 0.915 %) but raises the bunny's 2 % one (0.517 →
+    /// 0.706 %), for +3–6 % of the bunny run's CPU (docs/quality.md, "The
+    /// new faces' reach, cheaper").
     pub reach_faces: Option<f64>,
     /// What the run may do to the surface's topology to reach its target
     /// ([`TopologyChange`]; default [`TopologyChange::WhenShort`]).

@@ -4,7 +4,7 @@
 //! closed one-rings of the pair (what the batched walk relies on).
 
 use super::legality::{fuses_odd_edges, lands_on_any, link, moved_faces_ok, Faces};
-use super::reach::REACH_GATE;
+use super::reach::{REACH_FACES_MIN_LIVE, REACH_GATE};
 use super::{dv, Plan, Rejected, Simplifier, TopologyChange};
 use crate::mesh::adjacency::FanLookup;
 use crate::util::prefetch;
@@ -49,12 +49,14 @@ impl Simplifier {
             .reach
             .map_or(f64::INFINITY, |f| self.pass.spread_limit * f * f);
         let tested = limit.is_finite() && limit > 0.0 && error * error >= REACH_GATE * limit;
+        // (the new faces' test while enough of the input lives)
+        let faces = self
+            .opts
+            .reach_faces
+            .filter(|_| self.live_tris as f64 >= REACH_FACES_MIN_LIVE * self.tris.len() as f64);
         let deferred = tested
             && (self.reach_over(v0, v1, p, !removed.is_empty(), limit)
-                || self
-                    .opts
-                    .reach_faces
-                    .is_some_and(|f| self.faces_over(v0, v1, p, limit * f * f)));
+                || faces.is_some_and(|f| self.faces_over(v0, v1, p, limit * f * f)));
         let hole = if removed.len() == 1 {
             self.hole_cost(v0, v1)
         } else {
