@@ -340,6 +340,8 @@ fn build_mesh(
     let (full, measurer) = match free_sequence(&mut simplified, opts.keep_progressive, coherent) {
         Some(origins) => {
             drop(measurer);
+            // (the sequence's freed blocks, before the hierarchy's build)
+            return_freed_memory(input_triangles);
             measurer_in_input_order(&mut full, origins, (index, &name))
         }
         None => (&full, measurer),
@@ -605,9 +607,14 @@ fn extract_levels(
     let pm = &simplified.pm;
     let mut cursor = pm.cursor();
     let fit_source = FitSource::new(mesh, flat, simplified);
-    let mut out = Vec::with_capacity(splits.len());
+    let mut out: Vec<Option<Extracted>> = splits.iter().map(|_| None).collect();
     let mut polished = Mesh::default();
-    for &k in splits {
+    // (coarse to fine: the cursor applies each split once, where seeking
+    // the levels finest first refined to the finest, then undid most of it)
+    let mut order: Vec<usize> = (0..splits.len()).collect();
+    order.sort_by_key(|&i| splits[i]);
+    for i in order {
+        let k = splits[i];
         cursor.seek(k);
         let mut m = cursor.mesh();
         if let (Some((original, popts)), true) = (polish, k < pm.len()) {
@@ -618,7 +625,7 @@ fn extract_levels(
         }
         if deferred {
             let material = mesh.primitives.first().and_then(|p| p.material);
-            out.push(Extracted {
+            out[i] = Some(Extracted {
                 primitives: Vec::new(),
                 mesh: (k < pm.len()).then(|| m.clone()),
                 deferred: Some(material),
@@ -630,13 +637,13 @@ fn extract_levels(
             (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
             _ => None,
         };
-        out.push(Extracted {
+        out[i] = Some(Extracted {
             primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
             mesh: (measured && k < pm.len()).then(|| m.clone()),
             deferred: None,
         });
     }
-    Ok(out)
+    Ok(out.into_iter().flatten().collect())
 }
 
 /// The one primitive of a level of a mesh of one positions-only primitive

@@ -98,24 +98,27 @@ pub(super) fn in_progressive_order(
 /// `full` itself.
 pub(super) fn reference_in_input_order<'f>(
     full: &'f mut Mesh,
-    vertex_origin: &[u32],
-    triangle_origin: &[u32],
+    vertex_origin: Vec<u32>,
+    triangle_origin: Vec<u32>,
 ) -> (&'f Mesh, Option<(Reference<'f>, Duration)>) {
     let t = Instant::now();
-    let Some(welded) = in_input_order(full, vertex_origin, triangle_origin) else {
+    let Some(welded) = in_input_order(full, &vertex_origin, &triangle_origin) else {
         return (full, None);
     };
     // (the two copies never live beside the build's buffers)
     *full = Mesh::default();
     let reference = Reference::new(MeshRef::new(&welded.positions, &welded.triangles));
-    let vertex_new = inverse(vertex_origin);
-    *full = in_progressive_order(&welded, vertex_origin, triangle_origin, &vertex_new);
+    let vertex_new = inverse(&vertex_origin);
+    *full = in_progressive_order(&welded, &vertex_origin, &triangle_origin, &vertex_new);
+    let triangle_new = inverse(&triangle_origin);
+    // (the maps freed before the renumbering, which holds both copies)
+    drop((vertex_origin, triangle_origin));
     let full: &'f Mesh = full;
     let r = reference.ok().and_then(|r| {
         r.renumbered(
             MeshRef::new(&full.positions, &full.triangles),
             &vertex_new,
-            &inverse(triangle_origin),
+            &triangle_new,
         )
     });
     (full, r.map(|r| (r, t.elapsed())))
@@ -135,8 +138,7 @@ pub(super) fn measurer_in_input_order<'f>(
     (vertex_origin, triangle_origin, splits): Origins,
     (index, name): (usize, &'f str),
 ) -> (&'f Mesh, Measurer<'f>) {
-    let (full, built) = reference_in_input_order(full, &vertex_origin, &triangle_origin);
-    drop((vertex_origin, triangle_origin));
+    let (full, built) = reference_in_input_order(full, vertex_origin, triangle_origin);
     let m = Measurer::measured(splits, full, index, name);
     if let Some((r, took)) = built {
         m.set_reference(r, took);
@@ -162,7 +164,8 @@ mod tests {
             .pm;
         let fine = pm.mesh_at_splits(pm.len());
         let mut full = fine.clone();
-        let (full, r) = reference_in_input_order(&mut full, &pm.vertex_origin, &pm.triangle_origin);
+        let maps = (pm.vertex_origin.clone(), pm.triangle_origin.clone());
+        let (full, r) = reference_in_input_order(&mut full, maps.0, maps.1);
         let r = r.unwrap().0;
         // (made again as it was)
         assert_eq!(full, &fine);
