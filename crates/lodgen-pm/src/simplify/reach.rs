@@ -183,34 +183,26 @@ impl Simplifier {
         // fan's centre, the other corner) and an old face on it
         let mut old: SmallVec<[Old; 32]> = SmallVec::new();
         let mut edges: SmallVec<[(u32, u32, usize); 32]> = SmallVec::new();
-        for (i, &c) in v.iter().enumerate() {
-            for &t in self.vtris.fan(c) {
-                if !self.tri_alive[t as usize] {
-                    continue;
-                }
-                let tri = self.tris[t as usize];
-                let shared = tri.contains(&v[1 - i]);
-                if shared && i == 1 {
-                    continue;
-                }
-                if moves[i] && !shared {
-                    for x in tri {
-                        // (a corner both fans share gives one new edge)
-                        if x != c && !edges.iter().any(|e| e.1 == x) {
-                            edges.push((c, x, old.len()));
-                        }
+        self.fan_faces(v, |i, tri, shared| {
+            let c = v[i];
+            if moves[i] && !shared {
+                for x in tri {
+                    // (a corner both fans share gives one new edge)
+                    if x != c && !edges.iter().any(|e| e.1 == x) {
+                        edges.push((c, x, old.len()));
                     }
                 }
-                let [a, b, e] = tri.map(|x| dv(self.pos[x as usize]));
-                let n = (b - a).cross(e - a);
-                old.push(Old {
-                    ids: tri,
-                    corners: [a, b, e],
-                    n,
-                    nn: n.length_squared(),
-                });
             }
-        }
+            let [a, b, e] = tri.map(|x| dv(self.pos[x as usize]));
+            let n = (b - a).cross(e - a);
+            old.push(Old {
+                ids: tri,
+                corners: [a, b, e],
+                n,
+                nn: n.length_squared(),
+            });
+            false
+        });
         edges.iter().any(|&(c, x, k)| {
             let (pc, px) = (dv(self.pos[c as usize]), dv(self.pos[x as usize]));
             let m = (p + px) * 0.5;
@@ -294,22 +286,35 @@ impl Simplifier {
         moved: Option<DVec3>,
         mut f: impl FnMut([DVec3; 3]) -> bool,
     ) -> bool {
+        self.fan_faces(v, |_, tri, shared| {
+            // (a shared face is deleted when moved)
+            if shared && moved.is_some() {
+                return false;
+            }
+            let corners = tri.map(|x| match moved {
+                Some(p) if x == v[0] || x == v[1] => p,
+                _ => dv(self.pos[x as usize]),
+            });
+            f(corners)
+        })
+    }
+
+    /// Calls `f(i, face, shared)` for each live face of the fan of `v[i]`,
+    /// `i` = 0 then 1, a face of both fans (`shared`) once, from fan 0;
+    /// stops at the first `true` and returns whether `f` stopped it.
+    #[inline]
+    fn fan_faces(&self, v: [u32; 2], mut f: impl FnMut(usize, [u32; 3], bool) -> bool) -> bool {
         for (i, &c) in v.iter().enumerate() {
             for &t in self.vtris.fan(c) {
                 if !self.tri_alive[t as usize] {
                     continue;
                 }
                 let tri = self.tris[t as usize];
-                let other = tri.contains(&v[1 - i]);
-                // (a shared face is in both fans; deleted when moved)
-                if other && (i == 1 || moved.is_some()) {
+                let shared = tri.contains(&v[1 - i]);
+                if shared && i == 1 {
                     continue;
                 }
-                let corners = tri.map(|x| match moved {
-                    Some(p) if x == v[0] || x == v[1] => p,
-                    _ => dv(self.pos[x as usize]),
-                });
-                if f(corners) {
+                if f(i, tri, shared) {
                     return true;
                 }
             }
