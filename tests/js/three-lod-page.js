@@ -100,10 +100,13 @@ function attributeHash(p) {
   const drawn = w.channels.map((c) => p.channels.find((x) => x.c === c));
   if (drawn.some((x) => !x)) return null;
   const bits = drawn.map((x) => new Uint32Array(x.attr.array.buffer));
-  const f = fnv();
+  // the geometry is indexed: corner c draws vertex index[c] (one per
+  // distinct vertex and wedge)
+  const index = p.geometry.index.array, f = fnv();
   for (let c = 0; c < 3 * p.nt; c++) {
+    const v = index[c];
     f.put(p.decoder.wgroups[p.cw[c]]);
-    drawn.forEach((x, i) => { for (let j = 0; j < x.c.components; j++) f.put(bits[i][c * x.c.components + j]); });
+    drawn.forEach((x, i) => { for (let j = 0; j < x.c.components; j++) f.put(bits[i][v * x.c.components + j]); });
   }
   return f.value();
 }
@@ -193,10 +196,10 @@ window.uvRangeCheck = async (url) => {
   const key = (a, b) => a * 65536 + b;
   const file = new Set();
   for (let i = 0; i < fileUv.count; i++) file.add(key(fileUv.array[2 * i], fileUv.array[2 * i + 1]));
-  const uv = p.geometry.attributes.uv.array, seen = new Set();
+  const uv = p.geometry.attributes.uv.array, index = p.geometry.index.array, seen = new Set();
   let unmatched = 0;
   for (let c = 0; c < 3 * p.nt; c++) {
-    const a = uv[2 * c] * 65535, b = uv[2 * c + 1] * 65535, qa = Math.round(a), qb = Math.round(b);
+    const v = index[c], a = uv[2 * v] * 65535, b = uv[2 * v + 1] * 65535, qa = Math.round(a), qb = Math.round(b);
     if (Math.abs(a - qa) > 0.01 || Math.abs(b - qb) > 0.01 || !file.has(key(qa, qb))) unmatched++;
     seen.add(key(qa, qb));
   }

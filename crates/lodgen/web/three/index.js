@@ -294,15 +294,25 @@ export class ProgressiveMesh extends EventDispatcher {
     this.timeline.push({ what, t: performance.now() - this.t0, bytes: this.received });
   }
 
-  // A stream with wedges: one vertex per corner (a wedge may sit at two
-  // vertices), its position and the streamed attributes three.js draws
-  // (NORMAL, TEXCOORD_0..3, COLOR_0, TANGENT) copied from the corner's
-  // vertex and wedge at each level.
+  // A stream with wedges: drawn indexed, one vertex per distinct (vertex,
+  // wedge) pair of the drawn corners (a wedge may sit at two vertices, a
+  // vertex carry several wedges), its position and the streamed attributes
+  // three.js draws (NORMAL, TEXCOORD_0..3, COLOR_0, TANGENT) copied from
+  // the pair's vertex and wedge at each level. Pairs are numbered in order
+  // of first appearance in the corners, so at most one per corner.
   cornerGeometry(g, Pos) {
     const d = this.decoder, h = d.header, n = 3 * h.totalTriangles;
     const names = { NORMAL: "normal", TEXCOORD_0: "uv", TEXCOORD_1: "uv1", TEXCOORD_2: "uv2", TEXCOORD_3: "uv3", COLOR_0: "color", TANGENT: "tangent" };
     this.cw = new Uint32Array(n);
     this.cw.set(d.baseCW, 0);
+    // each corner's pair (the drawn index), each pair's vertex and wedge,
+    // and per vertex its pairs' list (head, stamped per rebuild; next)
+    this.pairs = {
+      index: new Uint32Array(n), v: new Uint32Array(n), w: new Uint32Array(n), next: new Int32Array(n),
+      head: new Int32Array(h.totalVertices), stamp: new Uint32Array(h.totalVertices), now: 0, count: 0,
+    };
+    g.setIndex(new BufferAttribute(this.pairs.index, 1));
+    g.index.setUsage(35048);
     g.setAttribute("position", new BufferAttribute(new Pos(n * 3), 3, this.quantized));
     this.channels = [];
     for (const c of h.wedges.channels) {
@@ -319,41 +329,68 @@ export class ProgressiveMesh extends EventDispatcher {
       this.channels.push({ c, attr: g.attributes[name], remap });
     }
     if (!g.attributes.normal) {
-      // none streamed: each corner gets its vertex's computed normal
+      // none streamed: each pair gets its vertex's computed normal
       g.setAttribute("normal", new BufferAttribute(new Int8Array(n * 3), 3, true));
       this.vnormal = new Int8Array(h.totalVertices * 3);
     }
   }
 
-  // Corner geometry: every drawn corner's position and attributes.
-  writeCorners() {
-    const g = this.geometry, n = 3 * this.nt, idx = this.indices, cw = this.cw, vp = this.vpos;
-    const pos = g.attributes.position.array, vals = this.decoder.wvals, stride = this.decoder.header.wedges.stride;
+  // Number the drawn corners' distinct (vertex, wedge) pairs in order of
+  // first appearance: pairs.index per corner, pairs.v / pairs.w per pair.
+  numberPairs() {
+    const P = this.pairs, n = 3 * this.nt, idx = this.indices, cw = this.cw;
+    const { index, v: pv, w: pw, next, head, stamp } = P;
+    const now = (P.now = (P.now + 1) >>> 0 || 1);
+    let count = 0;
     for (let c = 0; c < n; c++) {
-      const v = 3 * idx[c];
-      pos[3 * c] = vp[v]; pos[3 * c + 1] = vp[v + 1]; pos[3 * c + 2] = vp[v + 2];
+      const v = idx[c], w = cw[c], first = stamp[v] === now ? head[v] : -1;
+      let p = first;
+      while (p >= 0 && pw[p] !== w) p = next[p];
+      if (p < 0) {
+        p = count++;
+        pv[p] = v; pw[p] = w; next[p] = first;
+        head[v] = p; stamp[v] = now;
+      }
+      index[c] = p;
+    }
+    P.count = count;
+    return count;
+  }
+
+  // Corner geometry: the drawn corners' pairs, each pair's position and
+  // attributes.
+  writeCorners() {
+    const g = this.geometry, n = 3 * this.nt, vp = this.vpos, np = this.numberPairs();
+    const { v: pv, w: pw } = this.pairs;
+    const pos = g.attributes.position.array, vals = this.decoder.wvals, stride = this.decoder.header.wedges.stride;
+    for (let p = 0; p < np; p++) {
+      const v = 3 * pv[p];
+      pos[3 * p] = vp[v]; pos[3 * p + 1] = vp[v + 1]; pos[3 * p + 2] = vp[v + 2];
     }
     for (const { c: ch, attr, remap } of this.channels) {
       const out = attr.array, k = ch.components;
-      for (let c = 0; c < n; c++) {
-        const from = cw[c] * stride + ch.offset;
-        for (let j = 0; j < k; j++) out[c * k + j] = vals[from + j];
+      for (let p = 0; p < np; p++) {
+        const from = pw[p] * stride + ch.offset;
+        for (let j = 0; j < k; j++) out[p * k + j] = vals[from + j];
       }
-      if (remap) for (let i = 0; i < n * k; i++) out[i] = (out[i] - remap.offset[i % 2]) / remap.scale[i % 2];
+      if (remap) for (let i = 0; i < np * k; i++) out[i] = (out[i] - remap.offset[i % 2]) / remap.scale[i % 2];
     }
     if (this.vnormal) {
       const vn = this.computeNormals(this.vnormal), out = g.attributes.normal.array;
-      for (let c = 0; c < n; c++) {
-        const v = 3 * idx[c];
-        out[3 * c] = vn[v]; out[3 * c + 1] = vn[v + 1]; out[3 * c + 2] = vn[v + 2];
+      for (let p = 0; p < np; p++) {
+        const v = 3 * pv[p];
+        out[3 * p] = vn[v]; out[3 * p + 1] = vn[v + 1]; out[3 * p + 2] = vn[v + 2];
       }
     }
     for (const name of Object.keys(g.attributes)) {
       const a = g.attributes[name];
       a.clearUpdateRanges();
-      a.addUpdateRange(0, n * a.itemSize);
+      a.addUpdateRange(0, np * a.itemSize);
       a.needsUpdate = true;
     }
+    g.index.clearUpdateRanges();
+    g.index.addUpdateRange(0, n);
+    g.index.needsUpdate = true;
     g.setDrawRange(0, n);
   }
 
