@@ -4,7 +4,7 @@
 //
 //   node stream-bench.mjs --progressive P.glb --plain F.glb [--name NAME]
 //        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json] [--timeline]
-//        [--render task|each]
+//        [--render task|each] [--hold-ms MS]
 //
 // The local server sends every response after `latency-ms`, at `mbit`
 // Mbit/s, responses one after another on the one simulated line. The page
@@ -13,7 +13,8 @@
 // loader (coarsest level drawn = first pixel; every level applied and drawn
 // = full detail; the page draws once per task, as a render loop would once
 // per frame, so levels applied in one go share a draw; `--render each`: a
-// draw on every level event). A draw is timed until one pixel is read
+// draw on every level event; `--hold-ms`: the loader's holdMs, default its
+// own). A draw is timed until one pixel is read
 // back (the frame done), without the checks' screenshot. Prints each run,
 // then the medians with their spread (min – max over the runs) and the
 // median of the runs' own full/plain ratios (each progressive run follows
@@ -47,6 +48,7 @@ function parseArgs(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--timeline') o.timeline = true;
     else if (a === '--render') o.render = v();
+    else if (a === '--hold-ms') o.holdMs = Number(v());
     else { console.error(`stream-bench.mjs: unknown argument ${a}`); process.exit(2); }
   }
   if (!o.progressive || !o.plain) { console.error('stream-bench.mjs: needs --progressive P.glb --plain F.glb'); process.exit(2); }
@@ -110,7 +112,7 @@ async function main() {
       const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
       const plainFrame = await page.evaluate(() => window.frameMs(3));
       requests.length = 0;
-      const prog = await page.evaluate(([u, render]) => window.runProgressive(u, { hash: false, render, pixels: false }), [`${base}/progressive.glb`, o.render]);
+      const prog = await page.evaluate(([u, render, holdMs]) => window.runProgressive(u, { hash: false, render, pixels: false, holdMs }), [`${base}/progressive.glb`, o.render, o.holdMs]);
       const progFrame = await page.evaluate(() => window.frameMs(3));
       const mine = requests.filter((q) => q.path === '/progressive.glb');
       const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
