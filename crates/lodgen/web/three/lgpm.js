@@ -1,4 +1,4 @@
-// LODGEN_progressive stream decoder (layout version 5, docs/LODGEN_progressive.md),
+// LODGEN_progressive stream decoder (layout version 6, docs/LODGEN_progressive.md),
 // a second, independent implementation of crates/lodgen-pm/src/progressive/stream/.
 // Used by the `lodgen view` page (viewer.js) and the three.js loader
 // (three/index.js). The columns are decoded by meshoptimizer's
@@ -80,7 +80,7 @@ export function parseHeader(bytes) {
   const r = new Bytes(bytes, 0, 0);
   for (const m of [0x4c, 0x47, 0x50, 0x4d]) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
   const version = r.byte();
-  if (version !== 5) throw new Error(`unsupported stream version ${version}`);
+  if (version !== 6) throw new Error(`unsupported stream version ${version}`);
   const flags = r.byte();
   if (flags & ~3) throw new Error(`unknown flags ${flags}`);
   const bits = r.byte();
@@ -332,8 +332,8 @@ export class StreamDecoder {
   }
 
   // Take the next bytes of the stream (any split); decodes what is whole:
-  // a chunk's topology once its first columns are in, its positions and
-  // wedges once all of it is. Returns the number of records completed.
+  // a chunk's topology (and wedges) once its first columns are in, its
+  // positions once all of it is. Returns the number of records completed.
   push(chunk) {
     const before = this.count;
     if (!this.header) {
@@ -692,33 +692,31 @@ export class StreamDecoder {
     };
   }
 
-  // A chunk of n records, `have` of its bytes in: without wedges the
-  // topology is replayed once its first four columns are in (while the
-  // positions still download), the rest once the chunk is whole.
+  // A chunk of n records, `have` of its bytes in: the topology (and the
+  // wedges, whose columns come before the positions) is replayed once the
+  // columns before the positions are in, while the positions still
+  // download; the rest once the chunk is whole.
   decodeChunk(bytes, have, offset, n) {
     const h = this.header, whole = have === bytes.length;
     if (!this.topo) {
-      if (!whole && (h.wedges || !columnsIn(bytes, have, 4))) return;
+      const w = h.wedges, before = 4 + (w ? 1 + (w.groups > 1 ? 1 : 0) + w.channels.length : 0);
+      if (!whole && !columnsIn(bytes, have, before)) return;
       const cols = new Columns(this.mo, bytes, offset);
       const v1s = cols.u32("split vertex", n);
       const codes = cols.vertices("face code", 4, n);
       const extra = words(cols.u32("escape"), "escape");
       const mask = cols.bits("corner mask");
       this.topo = { cols, wc: null, first: this.count, va: this.nv, rings: new U32List(8 * n + 8), ringEnd: new Uint32Array(n) };
-      if (h.wedges) {
-        // the wedges are coded in replay order: read their columns first
-        this.topo.moved = cols.u16x4("moved position");
-        this.topo.fresh = cols.u16x4("new position", n);
-        this.topo.wc = this.wedgeColumns(cols);
-      }
+      // the wedges are coded in replay order
+      if (w) this.topo.wc = this.wedgeColumns(cols);
       for (let i = 0; i < n; i++) this.replay(this.count + i, v1s[i], codes, i, extra, mask, this.topo);
       if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
       if (this.topo.wc) this.topo.wc.finish();
     }
     if (!whole) return;
     const { cols, first, va } = this.topo;
-    const moved = this.topo.moved || cols.u16x4("moved position");
-    const fresh = this.topo.fresh || cols.u16x4("new position", n);
+    const moved = cols.u16x4("moved position");
+    const fresh = cols.u16x4("new position", n);
     if (h.flags & 1) cols.u32("error", n);
     cols.finish("the chunk");
     this.positions(first, n, moved, fresh, va, this.topo);

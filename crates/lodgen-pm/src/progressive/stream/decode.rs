@@ -111,8 +111,6 @@ fn read_columns<'a>(
     let at = r.offset();
     let words = r.vertices("escape", None, 8 * h.total_triangles + n)?;
     let mask = r.bits("corner mask", 8 * r.bytes.len())?;
-    let moved: Vec<[u16; 4]> = r.vertices("moved position", None, n)?;
-    let new: Vec<[u16; 4]> = r.vertices("new position", Some(n), 0)?;
     let wedges = match &h.wedges {
         Some(layout) => Some(WedgeColumns::read(
             r,
@@ -121,6 +119,8 @@ fn read_columns<'a>(
         )?),
         None => None,
     };
+    let moved: Vec<[u16; 4]> = r.vertices("moved position", None, n)?;
+    let new: Vec<[u16; 4]> = r.vertices("new position", Some(n), 0)?;
     let errors = if h.flags & FLAG_ERRORS != 0 {
         r.vertices("error", Some(n), 0)?
     } else {

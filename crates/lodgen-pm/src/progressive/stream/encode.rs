@@ -370,11 +370,13 @@ fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec
     cw.vertices(&cols.codes);
     cw.vertices(&cols.extra);
     cw.bits(&cols.mask);
-    cw.vertices(&prefix_sums(&moved_res));
-    cw.vertices(&prefix_sums(&new_res));
+    // the wedge columns before the positions (version 6): a decoder replays
+    // the chunk's topology and wedges while its positions still download
     if let Some((_, w)) = &mut st.wedges {
         w.flush(&mut cw);
     }
+    cw.vertices(&prefix_sums(&moved_res));
+    cw.vertices(&prefix_sums(&new_res));
     if st.errors {
         cw.vertices(&cols.errors);
     }

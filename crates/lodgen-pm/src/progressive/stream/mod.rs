@@ -3,7 +3,7 @@
 //! normative description of the layout; this module is its reference
 //! implementation).
 //!
-//! Layout (version 5), in short: a header (grid, counts, level table, wedge
+//! Layout (version 6), in short: a header (grid, counts, level table, wedge
 //! table, chunk table), then one **chunk** per step of the level chain: the
 //! base mesh, then the records up to each level's count, coarse → fine. A
 //! chunk is a sequence of **columns** (one per kind of value: split vertex,

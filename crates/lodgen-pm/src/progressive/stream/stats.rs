@@ -23,9 +23,7 @@ fn names(h: &StreamHeader, base: bool) -> Vec<String> {
     let mut out: Vec<String> = if base {
         vec!["base position".into(), "base triangles".into()]
     } else {
-        ["v1", "head", "escape", "mask", "moved", "new"]
-            .map(String::from)
-            .to_vec()
+        ["v1", "head", "escape", "mask"].map(String::from).to_vec()
     };
     if let Some(w) = &h.wedges {
         let p = if base { "base " } else { "" };
@@ -34,6 +32,10 @@ fn names(h: &StreamHeader, base: bool) -> Vec<String> {
             out.push(format!("{p}wedge groups"));
         }
         out.extend(w.channels.iter().map(|c| format!("{p}{}", c.name)));
+    }
+    // the positions after the wedge columns (version 6)
+    if !base {
+        out.extend(["moved", "new"].map(String::from));
     }
     if !base && h.flags & FLAG_ERRORS != 0 {
         out.push("errors".into());

@@ -7,7 +7,7 @@ use thiserror::Error;
 /// The four bytes every stream starts with.
 pub const MAGIC: [u8; 4] = *b"LGPM";
 /// The layout version this module writes and reads.
-pub const VERSION: u8 = 5;
+pub const VERSION: u8 = 6;
 /// Header flag: the stream stores every record's `error` (`f32`).
 pub const FLAG_ERRORS: u8 = 1;
 /// Header flag: the stream carries wedges (attributes per corner): a wedge
