@@ -193,8 +193,10 @@ impl TriangleBvh {
             u32::try_from(z.ids.len()).is_ok(),
             "more than u32::MAX triangles"
         );
-        let corners =
-            |slot: usize| mesh.triangles[z.ids[slot] as usize].map(|v| mesh.positions[v as usize]);
+        let corners = |slot: usize| {
+            mesh.prefetch_along(&z.ids, slot);
+            mesh.triangles[z.ids[slot] as usize].map(|v| mesh.positions[v as usize])
+        };
         // (the 4-wide tree directly, a chunk of the binary tree at a time: the whole binary
         // tree, 41 bytes a triangle, beside the 4-wide nodes was the measurement's peak)
         let wide = wide_tree(&z.codes, corners);

@@ -37,7 +37,7 @@ use super::sampling::{
     area_samples, max_above, measure_points, seek, Partial, SampleSet, Site, MAX_CANDIDATES,
 };
 use super::triangle::widen;
-use super::{zorder, MeshError, MeshRef};
+use super::{prefetch, zorder, MeshError, MeshRef, AHEAD};
 
 /// [`measure`]'s error: which mesh is invalid and why.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
@@ -409,6 +409,9 @@ fn measure_from(
     }
     let area = area_samples(from, order, set, to, plan.area_samples, plan.seed);
     let vertex = |i: usize, _: &mut usize| {
+        if let Some(&w) = set.vertices.get(i + AHEAD) {
+            prefetch(from.positions, w as usize);
+        }
         let v = set.vertices[i];
         (widen(from.positions[v as usize]), Site::Vertex(v))
     };
@@ -453,6 +456,7 @@ fn measure_from(
     if plan.coarse && area.count > 0 {
         // maxima of a coarse mesh's distance sit inside its large triangles: one point each
         let centroid = |i: usize, _: &mut usize| {
+            from.prefetch_along(order, i);
             let tri = order[i];
             let [a, b, c] = from.triangles[tri as usize].map(|v| widen(from.positions[v as usize]));
             let p = std::array::from_fn(|j| (a[j] + b[j] + c[j]) / 3.0);

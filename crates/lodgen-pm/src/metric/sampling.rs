@@ -290,7 +290,9 @@ impl SampleSet {
         let mut total = 0.0f64;
         let cumulative = order
             .iter()
-            .map(|&t| {
+            .enumerate()
+            .map(|(i, &t)| {
+                mesh.prefetch_along(order, i);
                 total += triangle_area(mesh, mesh.triangles[t as usize]);
                 total
             })
@@ -345,6 +347,7 @@ pub(super) fn area_samples(
             *cursor += 1;
         }
         let at = (*cursor).min(nt - 1);
+        from.prefetch_along(order, at);
         let [a, b, c] = corners(order[at]);
         let mut r1 = unit(splitmix64(seed, k + 1));
         let mut r2 = unit(splitmix64(seed, k + 2));

@@ -4,7 +4,7 @@
 //! depends on the triangle helpers only.
 
 use super::triangle::widen;
-use super::MeshRef;
+use super::{MeshRef, AHEAD};
 
 /// Spreads the low 21 bits of `x` to every third bit (Morton code helper).
 fn spread3(x: u64) -> u64 {
@@ -35,7 +35,8 @@ fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
 fn used_box(mesh: MeshRef<'_>) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for t in mesh.triangles {
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        mesh.prefetch_corners(i + AHEAD / 2);
         for &v in t {
             let p = widen(mesh.positions[v as usize]);
             for k in 0..3 {
@@ -62,7 +63,9 @@ pub(super) fn triangles(mesh: MeshRef<'_>) -> ZOrder {
     sorted(
         mesh.triangles
             .iter()
-            .map(|t| {
+            .enumerate()
+            .map(|(i, t)| {
+                mesh.prefetch_corners(i + AHEAD / 2);
                 let [a, b, c] = t.map(|v| widen(mesh.positions[v as usize]));
                 morton(std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0), lo, hi)
             })

@@ -69,7 +69,9 @@ pub(super) fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3
     let mut points: Vec<[f32; 3]> = Vec::new();
     let tris = ids
         .iter()
-        .map(|&t| {
+        .enumerate()
+        .map(|(i, &t)| {
+            mesh.prefetch_along(ids, i);
             mesh.triangles[t as usize].map(|v| {
                 let n = &mut number[v as usize];
                 if *n == u32::MAX {
