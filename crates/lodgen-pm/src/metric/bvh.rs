@@ -333,8 +333,11 @@ impl TriangleBvh {
                 // faster than searching the hint's surroundings first)
                 let query = Query::new(p, self.magnitude, h.slot, stop);
                 self.search::<false>(&query, 0, NO_NODE, &mut best);
-            } else if best.d2 > stop {
-                self.search_up(p, h, stop, &mut best);
+            } else if best.d2 > stop && !self.search_up_within(p, h, stop, &mut best) {
+                // (nothing within `stop`, which is rare for a maximum's points: the exact
+                // answer, top-down from the hint's bound as above)
+                let query = Query::new(p, self.magnitude, h.slot, -1.0);
+                self.search::<false>(&query, 0, NO_NODE, &mut best);
             }
         } else {
             let query = Query::new(p, self.magnitude, u32::MAX, stop);
@@ -366,7 +369,8 @@ impl TriangleBvh {
     /// `floor` (`hint`'s first, then its leaf's neighbours: then nothing else is searched). For
     /// a maximum over many points: the points nearer than the running maximum cost one
     /// triangle test each when the previous answer settles them, else a search upwards from it
-    /// that stops at the first triangle near enough, usually in the hint's own node.
+    /// within `floor` only, which stops at the first triangle near enough, usually in the
+    /// hint's own node; only a point farther than `floor` is then searched exactly.
     /// `None` also for an empty hierarchy.
     #[inline]
     pub(crate) fn farther_than(
@@ -381,17 +385,26 @@ impl TriangleBvh {
         }
     }
 
-    /// The search from a hint, bottom-up: the subtrees of the hint's node, then those of each
-    /// ancestor except the one just searched, up to the root. Every subtree is searched (or
-    /// skipped by its box) exactly once, so the answer is the top-down one; but a nearby
-    /// triangle is found first, and a search with a `stop` ends near the leaf it started from.
-    fn search_up(&self, p: [f64; 3], h: Hint, stop: f64, best: &mut Best) {
+    /// The search from a hint for a triangle within squared distance `stop`, bottom-up: the
+    /// subtrees of the hint's node, then those of each ancestor except the one just searched,
+    /// up to the root, only boxes within `stop` entered (so it ends near the leaf it started
+    /// from, and cheaply at the root when there is none: then the caller needs the exact
+    /// distance). True, with `best` that triangle, when one nearer than `stop` was found.
+    /// Which triangle is found depends on the visiting order, never whether one is.
+    fn search_up_within(&self, p: [f64; 3], h: Hint, stop: f64, best: &mut Best) -> bool {
         let query = Query::new(p, self.magnitude, h.slot, stop);
+        // (bounded by `stop` rather than by the hint's distance: a box farther than `stop`
+        // cannot hold what is looked for, and any triangle nearer is the first found)
+        let mut probe = Best { d2: stop, ..*best };
         let (mut node, mut came) = (h.node, NO_NODE);
         loop {
-            self.search::<true>(&query, node, came, best);
-            if best.d2 <= stop || node == 0 {
-                return;
+            self.search::<true>(&query, node, came, &mut probe);
+            if probe.d2 < stop {
+                *best = probe;
+                return true;
+            }
+            if node == 0 {
+                return false;
             }
             came = node;
             node = self.nodes[node as usize].parent;
@@ -594,5 +607,56 @@ impl Query {
             skip,
             stop,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+
+    /// `farther_than` (the vertex pass's query) against brute force: from the previous answer's
+    /// hint, as the pass chains them, a point nearer than the floor is settled (`None`), a
+    /// farther one gets its exact squared distance; floors from none to all of the points
+    /// settled. Fails when a point that no triangle within the floor settles is answered with
+    /// the search's bound instead of its exact distance, or when a settled point is reported.
+    #[test]
+    fn farther_than_is_exact_above_the_floor() {
+        let to = shapes::torus_knot(2, 3, 90, 12, 0.01);
+        let from = shapes::torus_knot(2, 3, 40, 8, 0.0);
+        let bvh = TriangleBvh::new(MeshRef::new(&to.positions, &to.triangles)).unwrap();
+        let brute = |p: [f64; 3]| {
+            to.triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|v| widen(to.positions[v as usize]));
+                    distance_squared(p, closest_point_on_triangle(p, a, b, c))
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let points: Vec<[f64; 3]> = from.positions.iter().map(|&q| widen(q)).collect();
+        let exact: Vec<f64> = points.iter().map(|&p| brute(p)).collect();
+        let mut sorted = exact.clone();
+        sorted.sort_by(f64::total_cmp);
+        let (mut settled, mut above) = (0, 0);
+        for k in [0, sorted.len() / 4, sorted.len() / 2, 3 * sorted.len() / 4] {
+            let floor = sorted[k];
+            let mut hint = None;
+            for (&p, &d2) in points.iter().zip(&exact) {
+                let (got, h) = bvh.farther_than(p, floor, hint);
+                hint = h;
+                if d2 > floor {
+                    assert_eq!(got, Some(d2), "floor {floor}: a point above it");
+                    above += 1;
+                } else {
+                    assert_eq!(got, None, "floor {floor}: a point within it");
+                    settled += 1;
+                }
+            }
+        }
+        assert!(
+            settled > 300 && above > 300,
+            "{settled} settled, {above} above"
+        );
     }
 }
