@@ -83,8 +83,9 @@ struct MeasureArgs {
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
-    return_large_blocks();
     let cli = Cli::parse();
+    // (after parsing, which starts no thread: the setting depends on the input's size)
+    tune_allocator(&cli);
     let result = match cli.command {
         Some(Command::Inspect { file }) => lodgen::inspect::inspect(&file)
             .with_context(|| format!("inspecting {}", file.display()))
@@ -142,12 +143,49 @@ fn quiet_on_closed_pipe() {
     }
 }
 
+/// One input file up to this size (the bunny's OBJ, 69,451 triangles, is
+/// 2.4 MB) is built with freed blocks kept for reuse (see [`tune_allocator`]).
+const SMALL_INPUT_BYTES: u64 = 8 << 20;
+
 /// glibc's malloc serves blocks of 128 KiB and more by `mmap` and gives
 /// them back on `free`, but after freeing one it raises that threshold to
 /// the freed block's size (up to 32 MiB): the simplifier's and the
 /// measurement's large arrays freed between phases then stay resident in
 /// the heap, and the next phase's peak stacks on them. A fixed threshold
 /// keeps returning them (bunny-1m: peak 396 -> 352 MB, same bytes).
+///
+/// A build of one small file does the opposite: every block returned is a
+/// block the next phase maps again, and the kernel faults and zeroes its
+/// pages anew (the bunny's run spent ~8 % of its CPU there). Up to
+/// [`SMALL_INPUT_BYTES`] of input, blocks up to 32 MiB come from the heap
+/// and the heap keeps up to 64 MiB of free memory: CPU −7 to −9 % (one
+/// thread), peak 22.7 → ~30 MB (docs/performance.md).
+fn tune_allocator(cli: &Cli) {
+    let small = cli.command.is_none()
+        && !lodgen::batch::is_batch(&cli.build)
+        && cli.build.inputs.first().is_some_and(|p| {
+            std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.len() <= SMALL_INPUT_BYTES)
+        });
+    if small {
+        keep_freed_blocks();
+    } else {
+        return_large_blocks();
+    }
+}
+
+/// For a small build: blocks below 32 MiB from the heap, up to 64 MiB of
+/// free heap kept (glibc; elsewhere nothing).
+fn keep_freed_blocks() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets allocator parameters; called before any
+    // thread is started.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 64 << 20);
+    }
+}
+
+/// For any other run: the fixed 128 KiB threshold (the reason above).
 fn return_large_blocks() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only sets an allocator parameter; called before any
