@@ -28,6 +28,7 @@
 //! assert!(e.hausdorff() < 1e-9); // (a mesh against itself: 0 up to rounding)
 //! ```
 
+use rayon::prelude::*;
 use thiserror::Error;
 
 mod bounded;
@@ -118,44 +119,80 @@ impl<'a> MeshRef<'a> {
     /// The first offending triangle, in triangle order.
     pub fn validate(&self) -> Result<(), MeshError> {
         let vertex_count = self.positions.len();
-        for (triangle, t) in self.triangles.iter().enumerate() {
+        let check = |(triangle, t): (usize, &[u32; 3])| {
             for &index in t {
                 let Some(p) = self.positions.get(index as usize) else {
-                    return Err(MeshError::IndexOutOfRange {
+                    return Some(MeshError::IndexOutOfRange {
                         triangle,
                         index,
                         vertex_count,
                     });
                 };
                 if !p.iter().all(|c| c.is_finite()) {
-                    return Err(MeshError::NonFinite {
+                    return Some(MeshError::NonFinite {
                         triangle,
                         vertex: index,
                     });
                 }
             }
+            None
+        };
+        // (on every core: a pass over a large mesh's corners; the first
+        // offending triangle in triangle order whatever the split)
+        match self
+            .triangles
+            .par_iter()
+            .enumerate()
+            .with_min_len(PAR_MIN)
+            .find_map_first(check)
+        {
+            Some(e) => Err(e),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// Diagonal of the bounding box of the vertices the triangles use; 0 without triangles.
     pub fn bbox_diagonal(&self) -> f64 {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for t in self.triangles {
-            for &v in t {
-                let Some(p) = self.positions.get(v as usize) else {
-                    continue;
-                };
-                for k in 0..3 {
-                    lo[k] = lo[k].min(f64::from(p[k]));
-                    hi[k] = hi[k].max(f64::from(p[k]));
-                }
-            }
-        }
+        let positions = self.positions;
+        let (lo, hi) = corner_box(self.triangles, |v| {
+            positions.get(v as usize).map(|p| p.map(f64::from))
+        });
         if lo[0] > hi[0] {
             return 0.0;
         }
         (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt()
     }
+}
+
+/// Triangles per piece of a pass over a mesh's corners split across the
+/// cores (a small mesh's passes stay on one).
+pub(crate) const PAR_MIN: usize = 1 << 14;
+
+/// The box (lowest, highest coordinates) of the points `at` gives for the
+/// corners of `triangles` (a corner it gives none for is left out); an
+/// empty box (lowest above highest) without points. On every core: min and
+/// max are exact, so the box does not depend on the split.
+pub(crate) fn corner_box(
+    triangles: &[[u32; 3]],
+    at: impl Fn(u32) -> Option<[f64; 3]> + Sync,
+) -> ([f64; 3], [f64; 3]) {
+    let empty = || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    triangles
+        .par_iter()
+        .with_min_len(PAR_MIN)
+        .fold(empty, |(mut lo, mut hi), t| {
+            for p in t.iter().filter_map(|&v| at(v)) {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            (lo, hi)
+        })
+        .reduce(empty, |(a, b), (c, d)| {
+            (
+                std::array::from_fn(|k| a[k].min(c[k])),
+                std::array::from_fn(|k| b[k].max(d[k])),
+            )
+        })
 }
