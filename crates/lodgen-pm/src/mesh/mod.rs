@@ -277,11 +277,18 @@ impl FirstOf {
     /// itself if none; it is then remembered).
     fn first(&mut self, item: u32, key: impl Fn(u32) -> [u32; 3]) -> u32 {
         let k = key(item);
-        let mut x = (u64::from(k[0]) << 32 | u64::from(k[1])) ^ u64::from(k[2]).rotate_left(17);
-        // splitmix64's finaliser
-        x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        let mut h = (x ^ (x >> 31)) as usize;
+        self.first_hashed(item, k, hash(k), key)
+    }
+
+    /// [`Self::first`] with the key `k` of `item` and its [`hash`] `h`.
+    fn first_hashed(
+        &mut self,
+        item: u32,
+        k: [u32; 3],
+        h: u64,
+        key: impl Fn(u32) -> [u32; 3],
+    ) -> u32 {
+        let mut h = h as usize;
         loop {
             let slot = &mut self.slots[h & self.mask];
             if *slot == Self::EMPTY {
@@ -294,6 +301,70 @@ impl FirstOf {
             h = h.wrapping_add(1);
         }
     }
+}
+
+/// The hash of a weld key [`FirstOf`] probes from (its low bits) and
+/// [`first_of_each_position`] shards by (its top bits).
+fn hash(k: [u32; 3]) -> u64 {
+    let mut x = (u64::from(k[0]) << 32 | u64::from(k[1])) ^ u64::from(k[2]).rotate_left(17);
+    // splitmix64's finaliser
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// Positions from which [`first_of_each_position`] runs on every core.
+const PAR_POSITIONS: usize = 1 << 16;
+
+/// Shards of [`first_of_each_position`]: the top bits of the hash.
+const SHARD_BITS: u32 = 4;
+
+/// For every position, the first (lowest) index of a position with the
+/// same bits (`0.0` and `-0.0` one value): the representative `prepare`
+/// welds it into, and what a positions-only wedge key finds. A large mesh's
+/// positions are hashed on every core and looked up shard by shard (a
+/// shard is the positions whose hash has the same top bits, so equal
+/// positions meet in one shard, offered in increasing order there): the
+/// same answer as one table.
+pub fn first_of_each_position(positions: &[[f32; 3]]) -> Vec<u32> {
+    let key = |j: u32| weld_key(&positions[j as usize]);
+    if positions.len() < PAR_POSITIONS {
+        let mut table = FirstOf::new(positions.len());
+        return (0..positions.len() as u32)
+            .map(|i| table.first(i, key))
+            .collect();
+    }
+    let hashes: Vec<u64> = positions
+        .par_iter()
+        .with_min_len(1 << 14)
+        .map(|p| hash(weld_key(p)))
+        .collect();
+    let shard = |h: u64| (h >> (64 - SHARD_BITS)) as usize;
+    // (each shard's later copies of a position: rare in a scan)
+    let copies: Vec<Vec<(u32, u32)>> = (0..1usize << SHARD_BITS)
+        .into_par_iter()
+        .map(|s| {
+            let count = hashes.iter().filter(|&&h| shard(h) == s).count();
+            let mut table = FirstOf::new(count);
+            let mut copies = Vec::new();
+            for (i, &h) in hashes.iter().enumerate() {
+                if shard(h) == s {
+                    let i = i as u32;
+                    let f = table.first_hashed(i, key(i), h, key);
+                    if f != i {
+                        copies.push((i, f));
+                    }
+                }
+            }
+            copies
+        })
+        .collect();
+    drop(hashes);
+    let mut first: Vec<u32> = (0..positions.len() as u32).into_par_iter().collect();
+    for (i, f) in copies.into_iter().flatten() {
+        first[i as usize] = f;
+    }
+    first
 }
 
 /// Validate `positions` + triangle `indices`, weld identical positions, drop
@@ -322,10 +393,7 @@ pub fn prepare(positions: &[[f32; 3]], indices: &[u32]) -> Result<Prepared, Mesh
     };
 
     // Canonical representative of each position: the lowest input index.
-    let mut table = FirstOf::new(positions.len());
-    let canonical: Vec<u32> = (0..positions.len() as u32)
-        .map(|i| table.first(i, |j| weld_key(&positions[j as usize])))
-        .collect();
+    let canonical = first_of_each_position(positions);
 
     let mut tris = canonical_triangles(indices, &canonical);
     let (mut vertex_map, welded_positions) = renumber(positions, &tris, &mut stats);
