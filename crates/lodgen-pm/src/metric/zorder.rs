@@ -73,14 +73,17 @@ pub(super) fn vertices(mesh: MeshRef<'_>) -> (Vec<u32>, bool) {
             used[v as usize] = true;
         }
     }
-    let z = sorted(
-        (0..mesh.positions.len())
-            .into_par_iter()
-            .with_min_len(PAR_MIN)
-            .filter(|&v| used[v])
-            .map(|v| (morton(widen(mesh.positions[v]), lo, hi), v as u32))
-            .collect::<Vec<_>>(),
-    );
+    // (the used vertices picked on one core, their codes written in place on every core: a
+    // parallel filter collects into pieces and copies them, twice the pairs at its peak)
+    let mut pairs: Vec<(u64, u32)> = (0..mesh.positions.len() as u32)
+        .filter(|&v| used[v as usize])
+        .map(|v| (0, v))
+        .collect();
+    pairs
+        .par_iter_mut()
+        .with_min_len(PAR_MIN)
+        .for_each(|(code, v)| *code = morton(widen(mesh.positions[*v as usize]), lo, hi));
+    let z = sorted(pairs);
     let tied = z.tied();
     (z.ids, tied)
 }
