@@ -51,6 +51,7 @@
 //! same bits. Topology is never changed, only positions.
 
 mod clusters;
+pub mod lift;
 
 pub use clusters::{polish_clusters, Original};
 
