@@ -437,16 +437,7 @@ fn extract_all(
     // `lodgen_pm::polish::lift`; half-edge levels keep input positions)
     // (not above `LIFT_MAX_VERTICES`: its quadrics would sit on a large
     // run's memory peak)
-    // nor with attribute seams (a vertex with two wedges at some step): the
-    // lift's quadrics hold no seam planes, so a seam vertex could leave its
-    // seam line (tests/attributes.rs, the textured grid)
-    let seamless = simplified
-        .pm
-        .wedges
-        .as_ref()
-        .is_none_or(|w| w.per_vertex.is_some());
     let lifted = opts.polish.is_none()
-        && seamless
         && full.positions.len() <= lodgen_pm::polish::lift::LIFT_MAX_VERTICES
         && opts.method == Method::Qem
         && opts.simplify.placement == lodgen_pm::simplify::Placement::Optimal;
