@@ -32,16 +32,6 @@ use crate::simplify::quadric::Quadric;
 use crate::simplify::{vertex_quadrics, SimplifyOptions};
 use glam::DVec3;
 
-/// The largest original (in vertices) whose written levels the CLI lifts.
-/// The lift holds every original vertex's quadric (88 bytes) while the
-/// levels are extracted, which is where a large run's memory peaks: on the
-/// 4.4M-triangle bunny (2.2M vertices) the peak went 641 → 829 MB, 147 →
-/// 186 bytes per triangle, over the 150 budget of issue 14. Above this size
-/// (meshes of about a million triangles and more) the levels keep the
-/// simplifier's positions; the lift's gain is in the 50 % levels' RMS, which
-/// on such dense meshes is already near zero (bunny ×16 at 50 %: 4·10⁻⁶ %).
-pub const LIFT_MAX_VERTICES: usize = 1 << 19;
-
 /// The quadrics of the original's vertices (face planes, border constraint
 /// planes as `opts` weigh them), for [`lift`].
 #[derive(Clone, Debug)]

@@ -435,10 +435,7 @@ fn extract_all(
     let polish = original.as_ref().zip(opts.polish.as_ref());
     // (unpolished QEM levels with optimal placement are lifted:
     // `lodgen_pm::polish::lift`; half-edge levels keep input positions)
-    // (not above `LIFT_MAX_VERTICES`: its quadrics would sit on a large
-    // run's memory peak)
     let lifted = opts.polish.is_none()
-        && full.positions.len() <= lodgen_pm::polish::lift::LIFT_MAX_VERTICES
         && opts.method == Method::Qem
         && opts.simplify.placement == lodgen_pm::simplify::Placement::Optimal;
     let lift = lifted.then(|| LiftQuadrics::new(full, &opts.simplify));
