@@ -35,8 +35,7 @@
 //! polishes lodgen's levels as `lodgen --polish` does
 //! (`lodgen_pm::polish_clusters`, `PolishOptions::CLUSTERS`) before they are
 //! measured, `--polish-exact` with `lodgen_pm::polish` (the hierarchies'
-//! closest points, default options); without either the levels are lifted
-//! (`lodgen_pm::polish::lift`), as `lodgen` writes them.
+//! closest points, default options).
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -194,7 +193,6 @@ fn lodgen_levels(m: &Mesh, args: &Args) -> Result<Vec<Mesh>> {
     let full = out.pm.mesh_at_splits(out.pm.len());
     let original = (args.polish == Some(Polish::Clusters))
         .then(|| lodgen_pm::polish::Original::new(MeshRef::new(&full.positions, &full.triangles)));
-    let lift = lodgen_pm::polish::lift::LiftQuadrics::new(&full, &opts);
     let reference = match args.polish {
         Some(Polish::Exact) => Some(Reference::new(MeshRef::new(&m.positions, &m.triangles))?),
         _ => None,
@@ -219,11 +217,7 @@ fn lodgen_levels(m: &Mesh, args: &Args) -> Result<Vec<Mesh>> {
                         &lodgen_pm::PolishOptions::DEFAULT,
                     );
                 }
-                // unpolished: lifted, as `lodgen` writes its levels
-                _ => {
-                    let rep = out.pm.representatives(k);
-                    lodgen_pm::polish::lift::lift(&lift, &mut level, &rep);
-                }
+                _ => {}
             }
             level
         })

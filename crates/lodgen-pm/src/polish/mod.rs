@@ -51,7 +51,6 @@
 //! same bits. Topology is never changed, only positions.
 
 mod clusters;
-pub mod lift;
 
 pub use clusters::{polish_clusters, Original};
 

@@ -56,7 +56,6 @@ pub use options::{
     DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR, DEFAULT_REACH_FACES_FACTOR,
     DEFAULT_REACH_FACTOR,
 };
-pub(crate) use setup::vertex_quadrics;
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
 
 use crate::mesh::adjacency::Fans;

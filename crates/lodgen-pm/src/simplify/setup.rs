@@ -235,13 +235,6 @@ impl Simplifier {
     }
 }
 
-/// Every vertex's quadric as the simplifier starts from it (face planes and
-/// border constraint planes; no feature planes): [`crate::polish::lift`].
-pub(crate) fn vertex_quadrics(mesh: &Mesh, opts: &SimplifyOptions) -> Vec<Quadric> {
-    let vtris = Fans::new(mesh.positions.len(), &mesh.triangles, |_| true);
-    classify_all(mesh, &vtris, opts).0
-}
-
 /// Every vertex's quadric, border, corner and non-manifold flags, from its own fan
 /// (in parallel): border and non-manifold edges, fans, and its quadric.
 fn classify_all(

@@ -6,7 +6,6 @@ use std::borrow::Cow;
 use std::time::{Duration, Instant};
 
 use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
-use lodgen_pm::polish::lift::LiftQuadrics;
 use lodgen_pm::polish::Original;
 use lodgen_pm::{
     levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
@@ -433,13 +432,6 @@ fn extract_all(
         .polish
         .map(|_| Original::new(MeshRef::new(&full.positions, &full.triangles)));
     let polish = original.as_ref().zip(opts.polish.as_ref());
-    // (unpolished QEM levels with optimal placement are lifted:
-    // `lodgen_pm::polish::lift`; half-edge levels keep input positions)
-    let lifted = opts.polish.is_none()
-        && opts.method == Method::Qem
-        && opts.simplify.placement == lodgen_pm::simplify::Placement::Optimal;
-    let lift = lifted.then(|| LiftQuadrics::new(full, &opts.simplify));
-    let polish = (polish, lift.as_ref());
     let extracted = if side_by_side {
         // (the original's hierarchy built on the other core meanwhile)
         let (extracted, prepared) = rayon::join(
@@ -610,10 +602,7 @@ fn extract_levels(
     simplified: &Simplified,
     splits: &[usize],
     (measured, deferred): (bool, bool),
-    (polish, lift): (
-        Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
-        Option<&LiftQuadrics>,
-    ),
+    polish: Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
 ) -> Result<Vec<Extracted>, BuildError> {
     let pm = &simplified.pm;
     let mut cursor = pm.cursor();
@@ -632,10 +621,6 @@ fn extract_levels(
             // (the written level polished: [`BuildOptions::polish`])
             polished.clone_from(m);
             lodgen_pm::polish_clusters(original, &mut polished, &pm.representatives(k), popts);
-            m = &polished;
-        } else if let (Some(quadrics), true) = (lift, k < pm.len()) {
-            polished.clone_from(m);
-            lodgen_pm::polish::lift::lift(quadrics, &mut polished, &pm.representatives(k));
             m = &polished;
         }
         if deferred {

@@ -57,12 +57,9 @@ pub struct BuildOptions {
     pub keep_input: bool,
     /// Move each written level's vertices towards the original after
     /// simplification ([`lodgen_pm::polish_clusters`], paired through the
-    /// simplification's clusters; `None`: off, the default; the written
-    /// levels are then lifted, [`lodgen_pm::polish::lift`]: each vertex one
-    /// damped Newton step on its cluster's quadric, no query).
-    /// The written levels and their measured errors are the polished (or
-    /// lifted) ones; the progressive mesh and its stream keep the
-    /// simplifier's positions.
+    /// simplification's clusters; `None`: off, the default).
+    /// The written levels and their measured errors are the polished ones;
+    /// the progressive mesh and its stream keep the simplifier's positions.
     pub polish: Option<lodgen_pm::PolishOptions>,
 }
 
