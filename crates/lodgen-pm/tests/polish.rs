@@ -6,13 +6,17 @@ use lodgen_pm::polish::Original;
 use lodgen_pm::shapes::torus;
 use lodgen_pm::{polish, polish_clusters, prepare, simplify, Mesh, PolishOptions, SimplifyOptions};
 
-/// The welded original and its level at `ratio`, cut from the log.
+/// The welded original and its level at `ratio`, cut from the log (the
+/// log's own positions, not lifted: `SimplifyOptions::lift` already moves
+/// the chords' vertices, so the polish is tested from the chords).
 fn level_of(m: &Mesh, ratio: f64) -> (Mesh, Mesh) {
     let p = prepare(&m.positions, &m.indices()).unwrap().mesh;
     let out = simplify(
         &p.positions,
         &p.indices(),
-        &SimplifyOptions::DEFAULT.with_target_ratio(ratio),
+        &SimplifyOptions::DEFAULT
+            .with_target_ratio(ratio)
+            .with_lift(false),
     )
     .unwrap();
     let mut c = out.pm.cursor();

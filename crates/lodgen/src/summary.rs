@@ -182,6 +182,13 @@ pub fn verbose(built: &BuiltFile, elapsed: Duration) -> String {
                 let _ = writeln!(s, "    {n:>9}  {words}");
             }
         }
+        if st.lifted + st.lift_refused > 0 {
+            let _ = writeln!(
+                s,
+                "  lifted off their chords: {} vertices ({} refused: a face would turn)",
+                st.lifted, st.lift_refused
+            );
+        }
         let prep = &b.simplified.prepare;
         let gone: Vec<_> = removed(prep).into_iter().filter(|r| r.1 > 0).collect();
         if gone.is_empty() {

@@ -43,7 +43,10 @@ impl Simplifier {
         } else {
             None
         };
-        let mut record = self.log.begin(v0, v1, self.pos[i1], &removed, error);
+        // (the positions the log records: `lift.rs`)
+        let liftable = self.liftable(v0, v1);
+        let logged = [v0, v1].map(|v| self.logged_position(v));
+        let mut record = self.log.begin(v0, v1, logged[1], &removed, error);
         for &t in &removed {
             self.tri_alive[t as usize] = false;
         }
@@ -74,6 +77,7 @@ impl Simplifier {
             at.contract(v0, v1, &removed, e, &self.tris, w);
         }
         self.merge_partners(v0, v1);
+        self.settle_lift(v0, logged[0], v1, liftable);
         record.moved.end = self.log.mark();
         self.log.records.push(record);
         self.stats.collapses += 1;

@@ -37,6 +37,7 @@ mod cost;
 pub(crate) mod features;
 pub(crate) mod heap;
 pub(crate) mod legality;
+mod lift;
 mod meter;
 mod options;
 pub(crate) mod pairs;
@@ -152,6 +153,9 @@ pub struct Simplifier {
     attributes: Option<AttributeCost>,
     /// Where `run` reports its progress, when set (`set_meter`).
     meter: Option<Arc<Meter>>,
+    /// Vertices whose position the log records lifted
+    /// ([`SimplifyOptions::lift`], `lift.rs`).
+    lifted: lift::Lifted,
 }
 
 /// A contraction that passed [`Simplifier::check`]: `v0` goes into `v1`,
@@ -428,7 +432,10 @@ impl Simplifier {
     /// The current mesh in the input's numbering.
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
-            positions: self.pos.clone(),
+            // (as the log records them: lifted where `lift.rs` lifts)
+            positions: (0..self.pos.len() as u32)
+                .map(|v| self.logged_position(v))
+                .collect(),
             triangles: (0..self.tris.len())
                 .filter(|&t| self.tri_alive[t])
                 .map(|t| (t as u32, self.tris[t]))
@@ -442,6 +449,9 @@ impl Simplifier {
         if let Some(m) = &self.meter {
             m.set_stage(Stage::Finishing);
         }
+        // the live vertices' positions as the log records them (before
+        // their quadrics are freed)
+        self.commit_lifts();
         // free what the log's renumbering does not read before it
         // allocates the progressive mesh (peak memory)
         self.pass = Pass::default();

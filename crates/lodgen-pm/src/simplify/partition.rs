@@ -359,6 +359,7 @@ impl Simplifier {
             features: self.features.as_ref().map(|f| f.restricted(verts)),
             attributes: None,
             meter: None,
+            lifted: super::lift::Lifted::new(nv, self.lifted.is_on()),
         }
     }
 
@@ -380,6 +381,7 @@ impl Simplifier {
                 self.alive[g] = s.alive[i];
                 self.boundary[g] = s.boundary[i];
                 self.corner[g] = s.corner[i];
+                self.lifted.set(g as u32, s.lifted.get(i as u32));
             }
         }
         let start = start as usize;

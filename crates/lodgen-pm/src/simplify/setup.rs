@@ -90,6 +90,7 @@ impl Simplifier {
             features: None,
             attributes: None,
             meter: None,
+            lifted: super::lift::Lifted::new(nv, opts.lift),
         };
         if opts.boundary == Boundary::Locked {
             for v in 0..nv {

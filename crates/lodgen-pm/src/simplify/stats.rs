@@ -98,6 +98,13 @@ pub struct Stats {
     /// is on, by the rule each broke (the first the usual checks would
     /// have refused it for).
     pub relaxed: Rejections,
+    /// Vertices the log records lifted off their simplified positions
+    /// ([`SimplifyOptions::lift`](super::SimplifyOptions::lift)), counted
+    /// when each is made.
+    pub lifted: usize,
+    /// Lifts refused because the lifted point would turn or collapse a
+    /// face of the vertex's fan (the simplifier's point logged).
+    pub lift_refused: usize,
     /// Wall time per phase.
     pub time: PhaseTimes,
 }

@@ -58,8 +58,11 @@ pub struct BuildOptions {
     /// Move each written level's vertices towards the original after
     /// simplification ([`lodgen_pm::polish_clusters`], paired through the
     /// simplification's clusters; `None`: off, the default).
-    /// The written levels and their measured errors are the polished ones;
-    /// the progressive mesh and its stream keep the simplifier's positions.
+    /// Polishing starts from the levels as the progressive mesh gives them
+    /// (lifted off their chords by default,
+    /// [`lodgen_pm::SimplifyOptions::lift`]). The written levels and their
+    /// measured errors are the polished ones; the progressive mesh and its
+    /// stream keep the logged positions.
     pub polish: Option<lodgen_pm::PolishOptions>,
 }
 

@@ -1,0 +1,261 @@
+//! The lift in the log: where a contraction placed the merged vertex on its
+//! pair's segment (the summed quadric nearly singular: a nearly flat pair,
+//! `Quadric::placement`'s fallback), the vertex sits on the chord, inside a
+//! convex patch and outside a concave one. The vertex-split log records it
+//! lifted instead: one damped Newton step on its cluster's quadric
+//! ([`Quadric::lifted`](super::quadric::Quadric::lifted)), along the
+//! patch's normal nearly all the way, sideways barely.
+//!
+//! The simplifier keeps its own (unlifted) working position for every later
+//! decision, so the contraction order is the unlifted run's (lifting the
+//! working positions changed it: 2 % Hausdorff −17..+111 %,
+//! docs/quality.md). What the log records is a pure function of the
+//! vertex's quadric and working position, which do not change until the
+//! vertex is contracted again: so the lifted point is not stored but
+//! recomputed where the log takes it ([`Simplifier::logged_position`]) —
+//! as `v1`'s position before its next contraction (the record's `p1`), as a
+//! removed vertex's last position (written over its working one when it
+//! dies: nothing reads a dead vertex's position), and as a base vertex's
+//! position (`finish`). One bit per vertex ([`Lifted`]) says whether its
+//! position is lifted; the log, the progressive mesh, its stream, every
+//! replayed or extracted level, the library, Python and the command all
+//! see the same lifted positions.
+//!
+//! Which vertices: those made by a contraction of two free vertices
+//! (neither locked, pinned nor fixed: no border corner, feature line or
+//! attribute seam vertex — a vertex with two wedges is on a seam, so
+//! pinned) with optimal placement, when [`SimplifyOptions::lift`] is on.
+//! Their quadrics hold face and border planes only (feature planes are
+//! added to feature vertices alone, and a free vertex's cluster holds no
+//! feature vertex: a pinned vertex is never removed into a free one). A
+//! lift that would turn a face of the vertex's fan at that moment by more
+//! than the legality test allows (or collapse it) is refused: the
+//! simplifier's point is logged (counted in `Stats::lift_refused`).
+//!
+//! [`SimplifyOptions::lift`]: super::SimplifyOptions::lift
+
+use super::legality::{DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
+use super::{dv, fv, Placement, Simplifier};
+use crate::mesh::adjacency::FanLookup;
+
+/// One bit per vertex: its position is logged lifted. Empty when the lift
+/// is off.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Lifted(Vec<u64>);
+
+impl Lifted {
+    /// `n` vertices, none lifted; no bit at all when `on` is false.
+    pub fn new(n: usize, on: bool) -> Lifted {
+        Lifted(if on {
+            vec![0; n.div_ceil(64)]
+        } else {
+            Vec::new()
+        })
+    }
+
+    /// The lift is on.
+    #[inline]
+    pub fn is_on(&self) -> bool {
+        !self.0.is_empty()
+    }
+
+    #[inline]
+    pub fn get(&self, v: u32) -> bool {
+        self.0
+            .get(v as usize / 64)
+            .is_some_and(|w| w >> (v % 64) & 1 != 0)
+    }
+
+    #[inline]
+    pub fn set(&mut self, v: u32, on: bool) {
+        if let Some(w) = self.0.get_mut(v as usize / 64) {
+            let m = 1u64 << (v % 64);
+            if on {
+                *w |= m;
+            } else {
+                *w &= !m;
+            }
+        }
+    }
+}
+
+impl Simplifier {
+    /// `v`'s position as the log records it: lifted if its bit says so,
+    /// else its working position.
+    #[inline]
+    pub(super) fn logged_position(&self, v: u32) -> [f32; 3] {
+        let p = self.pos[v as usize];
+        if !self.lifted.get(v) {
+            return p;
+        }
+        self.quadric[v as usize].lifted(dv(p)).map_or(p, fv)
+    }
+
+    /// Whether contracting `v0` into `v1` (before it is made) gives a
+    /// vertex that may be lifted: both free, optimal placement, lift on.
+    #[inline]
+    pub(super) fn liftable(&self, v0: u32, v1: u32) -> bool {
+        self.lifted.is_on()
+            && self.opts.placement == Placement::Optimal
+            && self.free(v0)
+            && self.free(v1)
+    }
+
+    /// After a contraction into `v1`: the removed `v0`'s last position
+    /// becomes the logged one (`logged0`, taken before the contraction),
+    /// and `v1`'s bit is decided (`liftable`: [`Simplifier::liftable`]
+    /// before the contraction).
+    pub(super) fn settle_lift(&mut self, v0: u32, logged0: [f32; 3], v1: u32, liftable: bool) {
+        if !self.lifted.is_on() {
+            return;
+        }
+        self.pos[v0 as usize] = logged0;
+        self.lifted.set(v0, false);
+        let on = liftable && self.lift_keeps_fan(v1);
+        self.lifted.set(v1, on);
+    }
+
+    /// `v1`'s lifted point differs from its working one and turns no face
+    /// of its fan (neighbours at their working positions) by more than
+    /// [`FLIP_MIN_COS`] nor collapses one ([`DEGENERATE_AREA_RATIO_SQ`]).
+    fn lift_keeps_fan(&mut self, v1: u32) -> bool {
+        let p = self.pos[v1 as usize];
+        let Some(l) = self.quadric[v1 as usize].lifted(dv(p)).map(fv) else {
+            return false;
+        };
+        if l == p {
+            return false;
+        }
+        let (pm, l) = (dv(p), dv(l));
+        for &t in self.vtris.fan(v1) {
+            if !self.tri_alive[t as usize] {
+                continue;
+            }
+            let (b, c) = match self.tris[t as usize] {
+                [x, b, c] | [c, x, b] | [b, c, x] if x == v1 => (b, c),
+                _ => continue,
+            };
+            let (b, c) = (dv(self.pos[b as usize]), dv(self.pos[c as usize]));
+            let bc = c - b;
+            let (n_old, n_new) = ((b - pm).cross(bc), (b - l).cross(bc));
+            let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
+            let d = n_old.dot(n_new);
+            if l_old > 0.0
+                && (l_new <= DEGENERATE_AREA_RATIO_SQ * l_old
+                    || d < 0.0
+                    || d * d < FLIP_MIN_COS * FLIP_MIN_COS * (l_old * l_new))
+            {
+                self.stats.lift_refused += 1;
+                return false;
+            }
+        }
+        self.stats.lifted += 1;
+        true
+    }
+
+    /// Every live vertex's working position replaced by its logged one,
+    /// before the log is renumbered (`finish`: the base mesh's positions).
+    pub(super) fn commit_lifts(&mut self) {
+        if !self.lifted.is_on() {
+            return;
+        }
+        for v in 0..self.pos.len() as u32 {
+            if self.lifted.get(v) {
+                self.pos[v as usize] = self.logged_position(v);
+                self.lifted.set(v, false);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::metric::{MeasureOptions, MeshRef};
+    use crate::{simplify, Mesh, SimplifyOptions};
+
+    /// A UV sphere of radius 1.
+    fn sphere(rings: u32, segments: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
+        let mut pos = vec![[0.0, 0.0, 1.0]];
+        for r in 1..rings {
+            let th = std::f64::consts::PI * f64::from(r) / f64::from(rings);
+            for s in 0..segments {
+                let ph = 2.0 * std::f64::consts::PI * f64::from(s) / f64::from(segments);
+                pos.push([
+                    (th.sin() * ph.cos()) as f32,
+                    (th.sin() * ph.sin()) as f32,
+                    th.cos() as f32,
+                ]);
+            }
+        }
+        pos.push([0.0, 0.0, -1.0]);
+        let last = pos.len() as u32 - 1;
+        let at = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
+        let mut idx = Vec::new();
+        for s in 0..segments {
+            idx.extend([0, at(1, s), at(1, s + 1)]);
+            idx.extend([last, at(rings - 1, s + 1), at(rings - 1, s)]);
+        }
+        for r in 1..rings - 1 {
+            for s in 0..segments {
+                let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s), at(r + 1, s + 1));
+                idx.extend([a, c, b, b, c, d]);
+            }
+        }
+        (pos, idx)
+    }
+
+    /// The lifted log's levels are closer to the sphere than the unlifted
+    /// one's, with the same contractions (topology, numbering, errors),
+    /// whole-mesh and partitioned, and the same bits on one thread.
+    #[test]
+    fn a_sphere_is_logged_lifted_towards_the_sphere() {
+        let (pos, idx) = sphere(120, 240);
+        for partition in [None, Some(4096)] {
+            let opts = SimplifyOptions::DEFAULT
+                .with_target_ratio(0.02)
+                .with_partition(partition);
+            let on = simplify(&pos, &idx, &opts).expect("a sphere simplifies");
+            let off = simplify(&pos, &idx, &opts.with_lift(false)).expect("simplifies");
+            let (pm, plain) = (&on.pm, &off.pm);
+            assert!(on.stats.lifted > 0, "nothing lifted");
+            assert_eq!(off.stats.lifted, 0);
+            assert_eq!(pm.len(), plain.len());
+            assert_eq!(pm.vertex_origin, plain.vertex_origin);
+            assert_eq!(pm.triangle_origin, plain.triangle_origin);
+            assert_eq!(pm.base.triangles, plain.base.triangles);
+            for (a, b) in pm.splits.iter().zip(&plain.splits) {
+                assert_eq!((a.v1, a.error), (b.v1, b.error));
+            }
+            // the finest level is the input, exactly
+            let full = pm.mesh_at_splits(pm.len());
+            assert_eq!(full, plain.mesh_at_splits(plain.len()));
+            let original = MeshRef::new(&full.positions, &full.triangles);
+            let rms = |m: &Mesh| {
+                crate::metric::measure(
+                    original,
+                    MeshRef::new(&m.positions, &m.triangles),
+                    &MeasureOptions::DEFAULT,
+                )
+                .expect("measurable")
+                .rms_percent()
+            };
+            for share in [2, 10] {
+                let k = pm.splits_for_triangles(idx.len() / 3 / share);
+                let (lifted, level) = (pm.mesh_at_splits(k), plain.mesh_at_splits(k));
+                assert_eq!(lifted.triangles, level.triangles);
+                let (before, after) = (rms(&level), rms(&lifted));
+                assert!(
+                    after < before * 0.97,
+                    "1/{share}, partition {partition:?}: RMS {before} -> {after} %"
+                );
+            }
+            // the same bits on one thread
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .expect("a pool");
+            let again = pool.install(|| simplify(&pos, &idx, &opts)).expect("again");
+            assert_eq!(&again.pm, pm);
+        }
+    }
+}
