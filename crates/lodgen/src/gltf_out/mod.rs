@@ -68,6 +68,7 @@ mod files;
 mod input;
 mod msft_lod;
 mod options;
+mod order;
 mod prepare;
 mod uvrange;
 

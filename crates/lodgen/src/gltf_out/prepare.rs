@@ -1,6 +1,6 @@
 //! Per-level preparation: validates every primitive of every level (typed
 //! [`LevelProblem`]s), computes missing normals, applies meshopt's vertex
-//! cache and fetch order, and the chain's dequantization box.
+//! cache (`order`) and fetch order, and the chain's dequantization box.
 
 use rayon::prelude::*;
 
@@ -131,7 +131,7 @@ fn prepare(p: &Primitive, material_count: usize) -> Result<Option<Prepared>, Lev
         return Ok(None);
     }
     let n = p.positions.len();
-    let mut indices = meshopt::optimize_vertex_cache(&p.indices, n);
+    let mut indices = super::order::vertex_cache_order(&p.indices, &p.positions);
     // Vertex fetch order on an identity stream: `order[new] = old`, which then
     // reorders every attribute the same way (unused vertices are dropped).
     let identity: Vec<u32> = (0..n as u32).collect();
