@@ -8,6 +8,7 @@ use lodgen_pm::shapes::{cube, grid, icosphere, torus_knot};
 use lodgen_pm::stream::{
     decode, decode_header, decode_with_attributes, encode, encode_with_attributes, AttrEncoding,
     Channel, EncodeError, EncodeOptions, Grid, StreamDecoder, StreamError, WedgeAttributes,
+    BLOCK_RECORDS,
 };
 use lodgen_pm::{simplify, simplify_with_wedges, Mesh, ProgressiveMesh, SimplifyOptions, Tau};
 use proptest::prelude::*;
@@ -638,6 +639,55 @@ fn incremental_wedged_decoding_shows_each_step() {
         }
         assert_eq!(d.finish_with_attributes().unwrap(), whole);
     }
+}
+
+/// A level step longer than a block: its topology and wedge columns in
+/// several blocks (version 7), decoded exactly, whole and in pieces that
+/// cut the blocks anywhere.
+#[test]
+fn chunks_of_several_blocks_round_trip() {
+    let (pm, attrs) = wedged(6, true, 400);
+    let (len, third) = (pm.len(), pm.len() / 3);
+    assert!(len - third > 2 * BLOCK_RECORDS, "{len} splits");
+    let levels = [len, third, 0];
+    let plain = encode(&pm, &levels, EncodeOptions::DEFAULT);
+    let h = decode_header(&plain).unwrap();
+    assert_eq!(h.chunks.len(), 3);
+    let (dec, _) = decode(&plain).unwrap();
+    for k in (0..=len).step_by(997).chain([third, len]) {
+        assert_eq!(
+            dec.mesh_at_splits(k).triangles,
+            pm.mesh_at_splits(k).triangles,
+            "k = {k}"
+        );
+    }
+    for c in &h.chunks {
+        assert_level_positions(&pm, &dec, c.records, &h.grid);
+    }
+    // the blocks' columns, then the positions: one `v1` value per record
+    let stats = lodgen_pm::stream::column_stats(&plain).unwrap();
+    let v1 = stats.iter().find(|s| s.name == "v1").unwrap();
+    assert_eq!(v1.count, len);
+    let bytes = encode_with_attributes(&pm, &levels, EncodeOptions::DEFAULT, &attrs).unwrap();
+    let whole = decode_with_attributes(&bytes).unwrap();
+    let encodings = decode_header(&bytes).unwrap().wedges.unwrap().encodings;
+    let attrs = round_tripped(&attrs, &encodings);
+    let decoded = whole.attributes.as_ref().unwrap();
+    let (mut a, mut d) = (pm.cursor(), whole.pm.cursor());
+    for k in [third, len] {
+        a.seek(k);
+        d.seek(k);
+        assert_same_corner_values(
+            k,
+            (a.wedges().unwrap(), &attrs),
+            (d.wedges().unwrap(), decoded),
+        );
+    }
+    let mut d = StreamDecoder::new();
+    for piece in bytes.chunks(4093) {
+        d.push(piece).unwrap();
+    }
+    assert_eq!(d.finish_with_attributes().unwrap(), whole);
 }
 
 #[test]

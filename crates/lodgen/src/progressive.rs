@@ -662,7 +662,7 @@ mod tests {
         assert!(root.get("extensionsRequired").is_none());
         let ext = &root["meshes"][1]["primitives"][0]["extensions"][EXTENSION];
         let h = lodgen_pm::stream::decode_header(&s).unwrap();
-        assert_eq!(ext["version"], 6);
+        assert_eq!(ext["version"], 7);
         assert_eq!(ext["chunks"], json!([h.chunk_offset(1), s.len()]));
         let f = find(&root).unwrap().unwrap();
         assert_eq!((f.mesh, f.primitive, f.buffer_view), (1, 0, 1));

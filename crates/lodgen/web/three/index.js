@@ -230,6 +230,8 @@ export class ProgressiveMesh extends EventDispatcher {
     this.mesh = null;
     this.fetched = 0; // stream chunks decoded
     this.requested = 0; // stream chunks requested
+    this.wanted = -1; // the last chunk asked for
+    this.lineOpen = false; // the file's first response reads on into the stream
     this.received = 0; // stream bytes received
     this.geometry = null; // the stream's, once its base is in
     this.t0 = performance.now();
@@ -494,6 +496,10 @@ export class ProgressiveMesh extends EventDispatcher {
   // as its bytes are there, while the next ones download).
   request(last) {
     last = Math.min(last, this.chunkEnds.length - 1);
+    this.wanted = Math.max(this.wanted, last);
+    // the file's first response still decides how far it reads (readOn):
+    // what it leaves is asked for then
+    if (this.lineOpen) return;
     if (this.requested > last) return;
     const from = this.requested || 0;
     this.requested = last + 1;
@@ -523,22 +529,44 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 
   // Feed the stream from `file` (read from the start of the file, already
-  // at or before the stream) up to file offset `end`, then let it go.
-  async readOn(file, end) {
-    await file.until(Math.min(this.streamStart, end));
+  // at or before the stream) up to the end of the chunk that completes
+  // `records` records, or of a later one `request` asked for meanwhile
+  // (the stream's header, its first bytes, has the chunk table), then let
+  // the rest of the file go and ask for any chunk still wanted.
+  async readOn(file, records) {
+    let h = null;
+    for (let n = 256; !h; n *= 2) {
+      const b = await file.until(this.streamStart + n);
+      try {
+        h = parseHeader(b.subarray(this.streamStart));
+      } catch (e) {
+        // (a header cut short throws lgpm.js's NeedMore, the only error
+        // without a message: read on)
+        if (e.message || b.length < this.streamStart + n) throw e;
+      }
+    }
+    const end = () => {
+      const last = Math.min(Math.max(h.chunks.findIndex((c) => c.records >= records), this.wanted), h.chunkEnds.length - 1);
+      this.requested = last + 1; // (what the line brings: see hold)
+      return this.streamStart + h.chunkEnds[last];
+    };
+    // file offset of the next piece `file.next()` gives
     let at = file.have;
-    const buffered = file.bytes.subarray(this.streamStart, Math.min(at, end));
+    const buffered = file.bytes.subarray(this.streamStart, Math.min(at, end()));
     if (buffered.length) this.take(buffered.slice());
-    if (at >= end) file.cancel();
-    while (at < end) {
+    while (at < end()) {
       const v = await file.next();
       if (!v) throw new Error(`${this.url}: the file ends in the stream`);
-      const from = Math.max(0, this.streamStart - at), to = Math.min(v.length, end - at);
+      const from = Math.max(0, this.streamStart - at), e = end(), to = Math.min(v.length, e - at);
       // let the rest go before decoding the last piece
-      if (at + v.length >= end) file.cancel();
+      if (at + v.length >= e) file.cancel();
       if (to > from) this.take(v.subarray(from, to));
       at += v.length;
     }
+    file.cancel();
+    this.requested = this.decoder.chunksDone;
+    this.lineOpen = false;
+    if (this.wanted >= this.requested) this.request(this.wanted);
   }
 
   take(bytes) {
@@ -731,24 +759,24 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   p.t0 = t0;
   p.mark("json");
   const wantRecords = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
-  const last = p.chunkEnds ? chunkForRecords(p.levels, p.chunkEnds, wantRecords) : -1;
   // the coarse level near the start (lodgen's files): read on to it
   const coarseNear = hi > lo && binStart + lo - file.have <= 65536;
   const coarse = hi <= lo ? null : coarseNear ? file.until(binStart + hi).then((b) => b.slice(binStart + lo, binStart + hi))
     : fetchRange(url, binStart + lo, binStart + hi, fetchOptions);
   // the stream right after it: read on in the same response up to the
-  // chunk that holds `prefetch`, then let the rest go
-  const onLine = coarseNear && last >= 0 && p.streamStart >= binStart + hi && p.streamStart - (binStart + hi) <= 64;
+  // chunk that holds `prefetch` (its header, the first bytes, says which),
+  // then let the rest go
+  const onLine = coarseNear && p.chunkEnds && p.streamStart >= binStart + hi && p.streamStart - (binStart + hi) <= 64;
   if (onLine) {
-    p.requested = last + 1;
-    p.pump = coarse.then(() => p.readOn(file, p.streamStart + p.chunkEnds[last])).catch((e) => { p.error = e; p.wake(); });
+    p.lineOpen = true;
+    p.pump = coarse.then(() => p.readOn(file, wantRecords)).catch((e) => { p.error = e; p.wake(); });
   } else if (p.chunkEnds) {
-    // in parallel with the coarse level: the stream up to `prefetch` (or
-    // chunk 0) in one streamed range request
-    p.request(last >= 0 ? last : 0);
-    // without the level → chunk map, ask for the rest once chunk 0
-    // (header + base) is in
-    if (last < 0) p.waitChunks(1).then(() => p.request(p.decoder.header.chunks.findIndex((c) => c.records >= wantRecords)), () => {});
+    // in parallel with the coarse level: the stream up to `prefetch` in one
+    // streamed range request (the base alone, or the whole stream, need
+    // no chunk table; else the header's says which chunk, once it is in)
+    const known = wantRecords === 0 ? 0 : wantRecords === Math.max(...p.levels) ? p.chunkEnds.length - 1 : -1;
+    p.request(Math.max(known, 0));
+    if (known < 0) p.waitChunks(1).then(() => p.request(p.decoder.header.chunks.findIndex((c) => c.records >= wantRecords)), () => {});
   }
   if (!coarseNear) file.cancel();
   if (coarse) bin.set(await coarse, lo);
@@ -766,13 +794,4 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   p.coarseTriangles = json.accessors[prim.indices].count / 3;
   p.nt = p.coarseTriangles;
   return p;
-}
-
-// The chunk holding record `want`, from the glTF `levels` and `chunks`
-// alone: lodgen writes one chunk per distinct non-zero level count; -1 when
-// the file's chunks are otherwise.
-function chunkForRecords(levels, chunkEnds, want) {
-  const ends = [0, ...[...new Set(levels)].filter((k) => k > 0).sort((a, b) => a - b)];
-  if (ends.length !== chunkEnds.length) return want === Math.max(...levels) ? chunkEnds.length - 1 : -1;
-  return ends.findIndex((k) => k >= want);
 }

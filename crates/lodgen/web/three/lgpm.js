@@ -1,4 +1,4 @@
-// LODGEN_progressive stream decoder (layout version 6, docs/LODGEN_progressive.md),
+// LODGEN_progressive stream decoder (layout version 7, docs/LODGEN_progressive.md),
 // a second, independent implementation of crates/lodgen-pm/src/progressive/stream/.
 // Used by the `lodgen view` page (viewer.js) and the three.js loader
 // (three/index.js). The columns are decoded by meshoptimizer's
@@ -11,8 +11,9 @@
 //   d.count                        // records decoded so far
 //   d.record(i)                    // {v1, v0, p1, pm, p0, faces, corners, wfaces, wafter, wbefore}
 //
-// A chunk's topology is replayed as soon as its first four columns are in
-// (streams without wedges), its positions once the chunk is whole. Records
+// A chunk's topology (and wedges) is replayed block by block (BLOCK_RECORDS
+// records each) as soon as each block's columns are in, its positions once
+// the chunk is whole. Records
 // are kept in typed arrays (see StreamDecoder), nothing is allocated per
 // record. Positions come out as grid points (d.q, Uint16Array, 3 per
 // vertex) and as f32 (center + (q - s) / s * half in double precision,
@@ -28,6 +29,8 @@ function dequantize(c, q) {
   return Math.fround(e === 1 ? q / 65535 : e === 2 ? (q - 127) / 127 : e === 3 ? q / 255 : c.offset0 + c.scale * (q / 65535));
 }
 const RING_CODES = 42;
+// records per block of a chunk's topology and wedge columns (version 7)
+export const BLOCK_RECORDS = 8192;
 const PERMS = [[0, 1, 2], [1, 2, 0], [2, 0, 1], [1, 0, 2], [0, 2, 1], [2, 1, 0]];
 
 class NeedMore extends Error {}
@@ -80,7 +83,7 @@ export function parseHeader(bytes) {
   const r = new Bytes(bytes, 0, 0);
   for (const m of [0x4c, 0x47, 0x50, 0x4d]) if (r.byte() !== m) throw new Error("not a lodgen progressive stream");
   const version = r.byte();
-  if (version !== 6) throw new Error(`unsupported stream version ${version}`);
+  if (version !== 7) throw new Error(`unsupported stream version ${version}`);
   const flags = r.byte();
   if (flags & ~3) throw new Error(`unknown flags ${flags}`);
   const bits = r.byte();
@@ -286,9 +289,9 @@ function ringPush(list, r0, u) {
   list.push(u);
 }
 
-// Whether `b[0..have]` holds the first `n` columns whole.
-function columnsIn(b, have, n) {
-  let pos = 0;
+// Whether `b[from..have]` holds the next `n` columns whole.
+function columnsIn(b, from, have, n) {
+  let pos = from;
   const varint = () => {
     let v = 0, mul = 1;
     for (let i = 0; i < 8; i++) {
@@ -545,7 +548,7 @@ export class StreamDecoder {
     let r = this.ringBuf, oldA = this.oldA, oldB = this.oldB, oldT = this.oldT, oldK = this.oldK, oldC = this.oldC;
     let n = 0, nc = 0, nt = 0, last = -1;
     for (let c = this.head[v]; c !== NONE; c = next[c]) {
-      const s = c % 3, o = c - s, t = (o / 3) | 0;
+      const t = (c / 3) | 0, o = 3 * t, s = c - o;
       if (nc === oldC.length) {
         this.growOld(nc);
         r = this.ringBuf; oldA = this.oldA; oldB = this.oldB; oldT = this.oldT; oldK = this.oldK; oldC = this.oldC;
@@ -693,33 +696,38 @@ export class StreamDecoder {
   }
 
   // A chunk of n records, `have` of its bytes in: the topology (and the
-  // wedges, whose columns come before the positions) is replayed once the
-  // columns before the positions are in, while the positions still
-  // download; the rest once the chunk is whole.
+  // wedges, whose columns come before the positions) is replayed block by
+  // block, each once its columns are in, while the rest of the chunk still
+  // downloads; the positions once the chunk is whole.
   decodeChunk(bytes, have, offset, n) {
     const h = this.header, whole = have === bytes.length;
     if (!this.topo) {
-      const w = h.wedges, before = 4 + (w ? 1 + (w.groups > 1 ? 1 : 0) + w.channels.length : 0);
-      if (!whole && !columnsIn(bytes, have, before)) return;
       const cols = new Columns(this.mo, bytes, offset);
-      const v1s = cols.u32("split vertex", n);
-      const codes = cols.vertices("face code", 4, n);
+      this.topo = { cols, wc: null, first: this.count, done: 0, va: this.nv, rings: new U32List(8 * n + 8), ringEnd: new Uint32Array(n) };
+    }
+    const topo = this.topo, cols = topo.cols, w = h.wedges;
+    const before = 4 + (w ? 1 + (w.groups > 1 ? 1 : 0) + w.channels.length : 0);
+    while (topo.done < n) {
+      if (!whole && !columnsIn(bytes, cols.r.pos, have, before)) return;
+      const m = Math.min(BLOCK_RECORDS, n - topo.done), at = topo.first + topo.done;
+      const v1s = cols.u32("split vertex", m);
+      const codes = cols.vertices("face code", 4, m);
       const extra = words(cols.u32("escape"), "escape");
       const mask = cols.bits("corner mask");
-      this.topo = { cols, wc: null, first: this.count, va: this.nv, rings: new U32List(8 * n + 8), ringEnd: new Uint32Array(n) };
       // the wedges are coded in replay order
-      if (w) this.topo.wc = this.wedgeColumns(cols);
-      for (let i = 0; i < n; i++) this.replay(this.count + i, v1s[i], codes, i, extra, mask, this.topo);
+      topo.wc = w ? this.wedgeColumns(cols) : null;
+      for (let i = 0; i < m; i++) this.replay(at + i, v1s[i], codes, i, extra, mask, topo);
       if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
-      if (this.topo.wc) this.topo.wc.finish();
+      if (topo.wc) topo.wc.finish();
+      topo.done += m;
     }
     if (!whole) return;
-    const { cols, first, va } = this.topo;
+    const { first, va } = topo;
     const moved = cols.u16x4("moved position");
     const fresh = cols.u16x4("new position", n);
     if (h.flags & 1) cols.u32("error", n);
     cols.finish("the chunk");
-    this.positions(first, n, moved, fresh, va, this.topo);
+    this.positions(first, n, moved, fresh, va, topo);
     this.topo = null;
     this.count += n;
   }
@@ -838,7 +846,7 @@ export class StreamDecoder {
     const tri = this.tri, no = this.nOldT, once = no === this.nOldC, oa = this.oldA, ob = this.oldB;
     if (this.wingT.length < this.nt - first) this.wingT = new Uint32Array(2 * (this.nt - first));
     const old = this.oldT, queue = this.queueT, taken = this.taken, wings = this.wingT;
-    taken.fill(0, 0, no);
+    for (let k = 0; k < no; k++) taken[k] = 0;
     let nw = 0, nq = 0;
     for (let t = first; t < this.nt; t++) {
       const o = 3 * t, f0 = tri[o], f1 = tri[o + 1], f2 = tri[o + 2];

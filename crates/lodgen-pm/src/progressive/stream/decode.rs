@@ -3,7 +3,9 @@
 use super::columns::{differences, BitReader, ColumnReader, Words};
 use super::header::{self, ReadError, Reader};
 use super::topo::{self, Topo, FACE_ESCAPE};
-use super::types::{invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS};
+use super::types::{
+    invalid, StreamError, StreamHeader, WedgeAttributes, WedgeLayout, BLOCK_RECORDS, FLAG_ERRORS,
+};
 use super::wedges::{face_corner_order, Rec, Shared, WedgeColumns, WedgeState, NONE};
 use crate::mesh::Mesh;
 use crate::progressive::{Corners, ProgressiveMesh, SplitWedges, VertexSplit, WedgeLog};
@@ -85,23 +87,26 @@ fn decode_base(h: &StreamHeader, bytes: &[u8], base: usize) -> Result<State, Str
     })
 }
 
-/// The columns of a record chunk, read before the replay.
+/// The columns of one block of a record chunk (version 7: the topology and
+/// wedge columns of up to [`BLOCK_RECORDS`] records), read before its replay.
 struct ChunkColumns<'a> {
     v1: Vec<u32>,
     codes: Vec<[u8; 4]>,
     extra: Words,
     mask: BitReader<'a>,
-    moved: Vec<[u16; 3]>,
-    new: Vec<[u16; 3]>,
     wedges: Option<WedgeColumns>,
-    errors: Vec<u32>,
+}
+
+/// What the replay of a chunk keeps across its blocks.
+#[derive(Default)]
+struct ChunkRings {
     /// Each record's `v0` ring once applied (flat, `ring_ends` per record).
     rings: Vec<u32>,
     ring_ends: Vec<usize>,
     predicted: Vec<bool>,
 }
 
-fn read_columns<'a>(
+fn read_block<'a>(
     h: &StreamHeader,
     r: &mut ColumnReader<'a>,
     n: usize,
@@ -119,26 +124,12 @@ fn read_columns<'a>(
         )?),
         None => None,
     };
-    let moved: Vec<[u16; 4]> = r.vertices("moved position", None, n)?;
-    let new: Vec<[u16; 4]> = r.vertices("new position", Some(n), 0)?;
-    let errors = if h.flags & FLAG_ERRORS != 0 {
-        r.vertices("error", Some(n), 0)?
-    } else {
-        Vec::new()
-    };
-    r.finish("the chunk")?;
     Ok(ChunkColumns {
         v1,
         codes,
         extra: Words { words, pos: 0, at },
         mask,
-        moved: differences(&moved),
-        new: differences(&new),
         wedges,
-        errors,
-        rings: Vec::new(),
-        ring_ends: Vec::with_capacity(n),
-        predicted: Vec::new(),
     })
 }
 
@@ -192,7 +183,7 @@ fn faces(
 fn replay(
     h: &StreamHeader,
     st: &mut State,
-    c: &mut ChunkColumns<'_>,
+    (c, k): (&mut ChunkColumns<'_>, &mut ChunkRings),
     i: usize,
     at: usize,
 ) -> Result<(VertexSplit, Option<SplitWedges>), StreamError> {
@@ -228,22 +219,22 @@ fn replay(
             &faces,
             ends,
             &held,
-            &mut c.predicted,
+            &mut k.predicted,
         );
     }
     let mut corners = Corners::new();
-    for (j, &k) in held.iter().enumerate() {
+    for (j, &corner) in held.iter().enumerate() {
         if if explicit {
             c.mask.next()?
         } else {
-            c.predicted[j]
+            k.predicted[j]
         } {
-            st.topo.move_corner(&mut st.mesh.triangles, k, v1, v0);
-            corners.push(k);
+            st.topo.move_corner(&mut st.mesh.triangles, corner, v1, v0);
+            corners.push(corner);
         }
     }
-    c.rings.extend(st.topo.ring(&st.mesh.triangles, v0));
-    c.ring_ends.push(c.rings.len());
+    k.rings.extend(st.topo.ring(&st.mesh.triangles, v0));
+    k.ring_ends.push(k.rings.len());
     let wedges = match (&h.wedges, &mut st.wedges, &mut c.wedges) {
         (Some(layout), Some(ws), Some(wc)) => {
             let first = st.mesh.triangles.len() - faces.len();
@@ -258,7 +249,6 @@ fn replay(
         }
         _ => None,
     };
-    let error = c.errors.get(i).map_or(0.0, |&b| f32::from_bits(b));
     let split = VertexSplit {
         v1,
         v0,
@@ -267,7 +257,7 @@ fn replay(
         p0: [0.0; 3],
         faces,
         corners,
-        error,
+        error: 0.0,
     };
     Ok((split, wedges))
 }
@@ -313,7 +303,7 @@ fn replay_wedges(
 fn positions(
     h: &StreamHeader,
     st: &mut State,
-    c: &ChunkColumns<'_>,
+    c: &PositionColumns,
     splits: &mut [VertexSplit],
     va: usize,
     at: usize,
@@ -348,8 +338,8 @@ fn positions(
         st.q[v as usize] = check([0, 1, 2].map(|k| s[k].wrapping_add(r[k])))?;
     }
     let mut from = 0;
-    for ((s, r), &to) in splits.iter().zip(&c.new).zip(&c.ring_ends) {
-        let pred = topo::predict_new(&st.q, &c.rings[from..to], s.v1);
+    for ((s, r), &to) in splits.iter().zip(&c.new).zip(&c.rings.ring_ends) {
+        let pred = topo::predict_new(&st.q, &c.rings.rings[from..to], s.v1);
         from = to;
         st.q.push(check([0, 1, 2].map(|k| pred[k].wrapping_add(r[k])))?);
     }
@@ -382,22 +372,51 @@ fn decode_chunk(
         pos: 0,
         base,
     };
-    let mut c = read_columns(h, &mut r, n)?;
     let va = st.q.len();
     let mut splits = Vec::with_capacity(n);
     let mut wedges = Vec::new();
-    for i in 0..n {
-        let (s, w) = replay(h, st, &mut c, i, base)?;
-        splits.push(s);
-        wedges.extend(w);
+    let mut rings = ChunkRings {
+        ring_ends: Vec::with_capacity(n),
+        ..ChunkRings::default()
+    };
+    // the blocks of topology and wedge columns, each replayed in turn
+    for from in (0..n).step_by(BLOCK_RECORDS) {
+        let m = BLOCK_RECORDS.min(n - from);
+        let mut c = read_block(h, &mut r, m)?;
+        for i in 0..m {
+            let (s, w) = replay(h, st, (&mut c, &mut rings), i, base)?;
+            splits.push(s);
+            wedges.extend(w);
+        }
+        c.extra.finish()?;
+        c.mask.finish()?;
+        if let Some(wc) = &c.wedges {
+            wc.finish()?;
+        }
     }
-    c.extra.finish()?;
-    c.mask.finish()?;
-    if let Some(wc) = &c.wedges {
-        wc.finish()?;
+    let moved: Vec<[u16; 4]> = r.vertices("moved position", None, n)?;
+    let new: Vec<[u16; 4]> = r.vertices("new position", Some(n), 0)?;
+    if h.flags & FLAG_ERRORS != 0 {
+        let errors: Vec<u32> = r.vertices("error", Some(n), 0)?;
+        for (s, e) in splits.iter_mut().zip(errors) {
+            s.error = f32::from_bits(e);
+        }
     }
+    r.finish("the chunk")?;
+    let c = PositionColumns {
+        moved: differences(&moved),
+        new: differences(&new),
+        rings,
+    };
     positions(h, st, &c, &mut splits, va, base)?;
     Ok((splits, wedges))
+}
+
+/// A chunk's position columns, and its records' `v0` rings.
+struct PositionColumns {
+    moved: Vec<[u16; 3]>,
+    new: Vec<[u16; 3]>,
+    rings: ChunkRings,
 }
 
 /// Decodes a stream fed in pieces of any size: the header as soon as its

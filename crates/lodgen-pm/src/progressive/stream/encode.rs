@@ -5,7 +5,7 @@ use super::header;
 use super::topo::{self, Topo, FACE_ESCAPE};
 use super::types::{
     chunk_ends, AttrEncoding, ChunkInfo, EncodeError, EncodeOptions, Grid, StreamHeader,
-    WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES,
+    WedgeAttributes, WedgeLayout, BLOCK_RECORDS, FLAG_ERRORS, FLAG_WEDGES,
 };
 use super::wedges::{face_corner_order, padded, zigzag, Rec, Shared, NONE};
 use crate::progressive::{ProgressiveMesh, WedgeLog};
@@ -332,13 +332,18 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
     }
 }
 
-/// The chunk of records `a .. b`.
+/// The chunk of records `a .. b`: its topology and wedge columns in blocks
+/// of [`BLOCK_RECORDS`] records, then its positions (version 7).
 fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec<u8> {
     let va = pm.base.positions.len() + a;
     let mut cols = TopoColumns::default();
     let mut moved: Vec<u32> = Vec::new();
+    let mut cw = ColumnWriter::default();
     for i in a..b {
         record(pm, i, st, &mut cols);
+        if (i + 1 - a) % BLOCK_RECORDS == 0 || i + 1 == b {
+            write_block(&mut cw, &mut cols, st);
+        }
         let v1 = pm.splits[i].v1;
         if (v1 as usize) < va && st.moved_slot[v1 as usize] == 0 {
             moved.push(v1);
@@ -365,22 +370,29 @@ fn record_chunk(pm: &ProgressiveMesh, a: usize, b: usize, st: &mut State) -> Vec
     for &v in &moved {
         st.moved_slot[v as usize] = 0;
     }
-    let mut cw = ColumnWriter::default();
-    cw.vertices(&cols.v1);
-    cw.vertices(&cols.codes);
-    cw.vertices(&cols.extra);
-    cw.bits(&cols.mask);
-    // the wedge columns before the positions (version 6): a decoder replays
-    // the chunk's topology and wedges while its positions still download
-    if let Some((_, w)) = &mut st.wedges {
-        w.flush(&mut cw);
-    }
     cw.vertices(&prefix_sums(&moved_res));
     cw.vertices(&prefix_sums(&new_res));
     if st.errors {
         cw.vertices(&cols.errors);
     }
     cw.out
+}
+
+/// A block's topology columns and (with wedges) its wedge columns, which
+/// come before the chunk's positions: a decoder replays the block while
+/// the rest of the chunk still downloads.
+fn write_block(cw: &mut ColumnWriter, cols: &mut TopoColumns, st: &mut State) {
+    cw.vertices(&cols.v1);
+    cw.vertices(&cols.codes);
+    cw.vertices(&cols.extra);
+    cw.bits(&cols.mask);
+    if let Some((_, w)) = &mut st.wedges {
+        w.flush(cw);
+    }
+    cols.v1.clear();
+    cols.codes.clear();
+    cols.extra.clear();
+    cols.mask = BitWriter::default();
 }
 
 fn components(a: &WedgeAttributes) -> Vec<u8> {

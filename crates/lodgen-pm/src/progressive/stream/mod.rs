@@ -3,12 +3,14 @@
 //! normative description of the layout; this module is its reference
 //! implementation).
 //!
-//! Layout (version 6), in short: a header (grid, counts, level table, wedge
+//! Layout (version 7), in short: a header (grid, counts, level table, wedge
 //! table, chunk table), then one **chunk** per step of the level chain: the
 //! base mesh, then the records up to each level's count, coarse → fine. A
 //! chunk is a sequence of **columns** (one per kind of value: split vertex,
 //! face codes, corner-edit masks, position residuals, wedge references,
-//! attribute values), each coded with meshoptimizer's vertex or index codec
+//! attribute values; a chunk's topology and wedge columns in blocks of
+//! [`BLOCK_RECORDS`] records, then its positions), each coded with
+//! meshoptimizer's vertex or index codec
 //! so that browsers decode them with the `meshoptimizer` npm package's
 //! `MeshoptDecoder` (no entropy coder of our own).
 //!
@@ -44,6 +46,6 @@ pub use encode::{encode, encode_with_attributes};
 pub use stats::{column_stats, ColumnStat};
 pub use types::{
     AttrEncoding, Channel, ChunkInfo, EncodeError, EncodeOptions, Grid, Range, StreamError,
-    StreamHeader, WedgeAttributes, WedgeLayout, FLAG_ERRORS, FLAG_WEDGES, MAGIC, MAX_CHANNELS,
-    MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
+    StreamHeader, WedgeAttributes, WedgeLayout, BLOCK_RECORDS, FLAG_ERRORS, FLAG_WEDGES, MAGIC,
+    MAX_CHANNELS, MAX_CHANNEL_NAME, MAX_COMPONENTS, VERSION,
 };

@@ -4,7 +4,7 @@
 
 use super::columns::ColumnReader;
 use super::decode::decode_header;
-use super::types::{invalid, StreamError, StreamHeader, FLAG_ERRORS};
+use super::types::{invalid, StreamError, StreamHeader, BLOCK_RECORDS, FLAG_ERRORS};
 
 /// One column kind's total over the stream's chunks.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -18,26 +18,31 @@ pub struct ColumnStat {
     pub bytes: usize,
 }
 
-/// The names of a chunk's columns in order (`base`: chunk 0).
-fn names(h: &StreamHeader, base: bool) -> Vec<String> {
-    let mut out: Vec<String> = if base {
-        vec!["base position".into(), "base triangles".into()]
-    } else {
-        ["v1", "head", "escape", "mask"].map(String::from).to_vec()
-    };
+/// The names of a chunk's columns in order (`base`: chunk 0; else a chunk
+/// of `records` records: its blocks' columns, then its positions).
+fn names(h: &StreamHeader, base: bool, records: usize) -> Vec<String> {
+    let mut wedges = Vec::new();
     if let Some(w) = &h.wedges {
         let p = if base { "base " } else { "" };
-        out.push(format!("{p}wedge refs"));
+        wedges.push(format!("{p}wedge refs"));
         if w.groups > 1 {
-            out.push(format!("{p}wedge groups"));
+            wedges.push(format!("{p}wedge groups"));
         }
-        out.extend(w.channels.iter().map(|c| format!("{p}{}", c.name)));
+        wedges.extend(w.channels.iter().map(|c| format!("{p}{}", c.name)));
     }
-    // the positions after the wedge columns (version 6)
-    if !base {
-        out.extend(["moved", "new"].map(String::from));
+    if base {
+        let mut out: Vec<String> = vec!["base position".into(), "base triangles".into()];
+        out.extend(wedges);
+        return out;
     }
-    if !base && h.flags & FLAG_ERRORS != 0 {
+    let mut out = Vec::new();
+    // the blocks' topology and wedge columns, then the positions (version 7)
+    for _ in 0..records.div_ceil(BLOCK_RECORDS) {
+        out.extend(["v1", "head", "escape", "mask"].map(String::from));
+        out.extend(wedges.iter().cloned());
+    }
+    out.extend(["moved", "new"].map(String::from));
+    if h.flags & FLAG_ERRORS != 0 {
         out.push("errors".into());
     }
     out
@@ -63,7 +68,8 @@ pub fn column_stats(bytes: &[u8]) -> Result<Vec<ColumnStat>, StreamError> {
             pos: 0,
             base: at,
         };
-        for name in names(&h, i == 0) {
+        let records = c.records - if i == 0 { 0 } else { h.chunks[i - 1].records };
+        for name in names(&h, i == 0, records) {
             let start = r.pos;
             let count = r.varint()? as usize;
             let len = r.varint()? as usize;

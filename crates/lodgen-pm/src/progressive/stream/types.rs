@@ -7,7 +7,12 @@ use thiserror::Error;
 /// The four bytes every stream starts with.
 pub const MAGIC: [u8; 4] = *b"LGPM";
 /// The layout version this module writes and reads.
-pub const VERSION: u8 = 6;
+pub const VERSION: u8 = 7;
+/// Records per block of a chunk's topology (and wedge) columns (version 7):
+/// a chunk of `n` records holds `⌈n / BLOCK_RECORDS⌉` blocks, all but the
+/// last of this many records, so a client reading the chunk as it arrives
+/// replays each block once its columns are in.
+pub const BLOCK_RECORDS: usize = 8192;
 /// Header flag: the stream stores every record's `error` (`f32`).
 pub const FLAG_ERRORS: u8 = 1;
 /// Header flag: the stream carries wedges (attributes per corner): a wedge
