@@ -215,6 +215,9 @@ struct Pass {
     spread_limit: f64,
     /// Candidates skipped by `spread_limit` in this pass.
     deferred: usize,
+    /// Passes in a row that contracted nothing (each loosens the next
+    /// pass's spread bound by a larger step, `schedule::STUCK_GROWTH`).
+    stuck: u32,
     /// The rules this pass relaxes ([`SimplifyOptions::topology_change`]:
     /// raised a stage each time the run is stuck; back to none after a
     /// pass that made a contraction).

@@ -35,6 +35,29 @@ const SPREAD_FACTOR: f64 = 1.5;
 /// evenly spaced in the pass's order (a bounded cost per pass).
 const SPREAD_SAMPLES: usize = 1 << 12;
 
+/// A pass that contracted nothing but deferred pairs (by the spread bound
+/// or reach) is followed by one whose spread bound is at least the stuck
+/// pass's times this factor squared (a factor on distances), after the
+/// k-th such pass in a row the factor to the power 2^(k−1) (1.1, 1.21,
+/// 1.46, 2.14, 4.6, 21, …), until that is over [`STUCK_UNBOUND`] × the
+/// pass's own bound: then the pass has no bound. Before (session 20) every
+/// stuck pass was followed by one without the bound, which contracted its
+/// cheapest pairs unchecked (the cow's run to 2 % alternated so from 166
+/// live triangles). `target/release/xtask quality --quick`, geometric mean
+/// of lodgen / best peer 0.910 / 0.933 before; steps g^(2^(k−1)): g 1.1
+/// **0.897 / 0.932** (cow 2 % H / RMS 5.898 / 0.931 → 4.444 / 0.921 %),
+/// 1.2 0.906 / 0.931 (5.425 / 0.890 %), 1.5 0.906 / 0.931; steps g^k: 1.1
+/// 0.896 / 0.931, 1.2 0.902 / 0.931; a constant step (session 19): 1.1
+/// 0.896 / 0.929, 1.2 0.897 / 0.929 — every other cell the same bits in
+/// each. The constant step costs most when no legal pair is left (beetle
+/// with its normals: 21 → 81 passes at 1.2); the doubling exponent bounds
+/// a stuck run to a few passes (44 at 1.1; callgrind, docs/quality.md
+/// "Hausdorff (session 20)"). Jumping the bound to the cheapest pair it
+/// deferred (g 1): 801 passes on the cow, dropped.
+const STUCK_GROWTH: f64 = 1.1;
+/// See [`STUCK_GROWTH`] (on squared distances).
+const STUCK_UNBOUND: f64 = 1e6;
+
 /// [`TopologyChange::Joins`] or [`TopologyChange::All`] with
 /// [`Schedule::Passes`]: a pass after one whose candidates refused by
 /// the topology rules (link, border pinch, duplicate; or contracted
@@ -193,6 +216,10 @@ impl Simplifier {
             let pass = &mut self.pass;
             if pass.cursor >= pass.queue.len() {
                 let stuck = pass.open && pass.collapses == 0;
+                // (a stuck pass that deferred pairs: the next one loosens
+                // the spread bound, `Simplifier::loosened`)
+                let loosen = stuck && pass.deferred > 0;
+                pass.stuck = if loosen { pass.stuck + 1 } else { 0 };
                 // (after a pass that made a contraction, every rule is back)
                 if !stuck {
                     // (the next pass relaxes joins and flattening too when
@@ -219,9 +246,9 @@ impl Simplifier {
                         }
                     }
                 }
-                // (a pass that contracted nothing but deferred pairs is
+                // (a pass that contracted nothing and deferred nothing is
                 // followed by one without the spread bound)
-                self.start_pass(factor, !stuck);
+                self.start_pass(factor, !stuck || loosen);
                 if self.pass.queue.is_empty() {
                     return Err(StopReason::Exhausted);
                 }
@@ -313,7 +340,7 @@ impl Simplifier {
         let (limit, spread) = if goal / 2 < queue.len() {
             buckets.sort_through(&mut queue, goal / 2, pass_order);
             let spread = if bounded {
-                self.spread_limit(&queue[..goal / 2])
+                self.loosened(self.spread_limit(&queue[..goal / 2]))
             } else {
                 f64::INFINITY
             };
@@ -340,6 +367,28 @@ impl Simplifier {
         pass.refused = 0;
         self.stats.passes += 1;
         self.stats.time.heap += t0.elapsed();
+    }
+
+    /// The spread bound `own` of a pass (its quantile), loosened after
+    /// passes that contracted nothing ([`STUCK_GROWTH`]): at least the
+    /// stuck pass's bound times the step squared; infinite (no bound) once
+    /// that is over [`STUCK_UNBOUND`] × `own`.
+    fn loosened(&self, own: f64) -> f64 {
+        let (k, prev) = (self.pass.stuck, self.pass.spread_limit);
+        if k == 0 || prev <= 0.0 || !own.is_finite() {
+            return own;
+        }
+        if !prev.is_finite() {
+            return prev;
+        }
+        // the k-th stuck pass in a row: a step of g^(2^(k−1)) in distance
+        let g = STUCK_GROWTH.powi(1 << (k - 1).min(16));
+        let loose = g * g * prev;
+        if loose > STUCK_UNBOUND * own {
+            f64::INFINITY
+        } else {
+            own.max(loose)
+        }
     }
 
     /// The spread bound ([`SPREAD_QUANTILE`]) over the pass's first
