@@ -8,7 +8,7 @@
 //! triangles is therefore cut into spatially compact chunks of `CHUNK`
 //! triangles (triangles sorted by the Morton code of their centroid in the
 //! primitive's box, ties by triangle number), each chunk's vertices
-//! numbered apart and optimised alone, in parallel, and the chunks
+//! numbered apart (in order of first use) and optimised alone, in parallel, and the chunks
 //! concatenated in Morton order. The cut depends on the primitive only,
 //! never on the thread count, so the output is the same for any thread
 //! count. What a chunk boundary costs (a vertex shared by two chunks is
@@ -40,23 +40,33 @@ fn chunked(indices: &[u32], positions: &[[f32; 3]], chunk: usize) -> Vec<u32> {
         .map(|t| [t[0], t[1], t[2]])
         .collect();
     let order = morton_order(&tris, positions);
+    let n = positions.len();
     let pieces: Vec<Vec<u32>> = order
         .par_chunks(chunk)
-        .map(|ids| {
-            // the chunk's vertices numbered by increasing global number
-            let mut verts: Vec<u32> = ids.iter().flat_map(|&t| tris[t as usize]).collect();
-            verts.sort_unstable();
-            verts.dedup();
-            let local: Vec<u32> = ids
-                .iter()
-                .flat_map(|&t| tris[t as usize])
-                .map(|v| verts.binary_search(&v).map_or(0, |i| i as u32))
-                .collect();
-            meshopt::optimize_vertex_cache(&local, verts.len())
-                .into_iter()
-                .map(|l| verts[l as usize])
-                .collect()
-        })
+        // (a global → local map per worker, reset after each chunk)
+        .map_init(
+            || vec![u32::MAX; n],
+            |local_of, ids| {
+                // the chunk's vertices numbered in order of first use
+                let mut verts: Vec<u32> = Vec::new();
+                let mut local: Vec<u32> = Vec::with_capacity(ids.len() * 3);
+                for &v in ids.iter().flat_map(|&t| &tris[t as usize]) {
+                    let l = &mut local_of[v as usize];
+                    if *l == u32::MAX {
+                        *l = verts.len() as u32;
+                        verts.push(v);
+                    }
+                    local.push(*l);
+                }
+                for &v in &verts {
+                    local_of[v as usize] = u32::MAX;
+                }
+                meshopt::optimize_vertex_cache(&local, verts.len())
+                    .into_iter()
+                    .map(|l| verts[l as usize])
+                    .collect()
+            },
+        )
         .collect();
     pieces.concat()
 }
