@@ -57,6 +57,10 @@ const SPREAD_SAMPLES: usize = 1 << 12;
 const STUCK_GROWTH: f64 = 1.1;
 /// See [`STUCK_GROWTH`] (on squared distances).
 const STUCK_UNBOUND: f64 = 1e6;
+/// Stuck passes in a row after which the next pass has no bound whatever
+/// the bounds (with [`STUCK_GROWTH`] the step is then over 10¹⁰ on squared
+/// distances: unbounded already unless the bounds are degenerate).
+const STUCK_MAX_PASSES: u32 = 8;
 
 /// [`TopologyChange::Joins`] or [`TopologyChange::All`] with
 /// [`Schedule::Passes`]: a pass after one whose candidates refused by
@@ -375,11 +379,15 @@ impl Simplifier {
     /// that is over [`STUCK_UNBOUND`] × `own`.
     fn loosened(&self, own: f64) -> f64 {
         let (k, prev) = (self.pass.stuck, self.pass.spread_limit);
-        if k == 0 || prev <= 0.0 || !own.is_finite() {
+        if k == 0 {
             return own;
         }
-        if !prev.is_finite() {
-            return prev;
+        // (a stuck pass with no positive finite bound to grow from — a
+        // zero bound on a flat patch, say — or a run stuck that long: no
+        // bound, as before the loosening; growing from zero would stall the
+        // run forever)
+        if !(prev > 0.0 && prev.is_finite() && own.is_finite()) || k > STUCK_MAX_PASSES {
+            return f64::INFINITY;
         }
         // the k-th stuck pass in a row: a step of g^(2^(k−1)) in distance
         let g = STUCK_GROWTH.powi(1 << (k - 1).min(16));
