@@ -41,6 +41,7 @@ mod zorder;
 
 pub use bvh::TriangleBvh;
 pub use measure::*;
+pub use zorder::interleave3;
 
 /// Asks for `items[i]`'s cache line ahead of its use (nothing when `i` is out of range): a
 /// hint, no effect on results. The metric reads meshes along the Z-order, which scatters over

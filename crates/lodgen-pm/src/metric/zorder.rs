@@ -30,7 +30,15 @@ fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
             0
         }
     };
-    spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
+    interleave3([q(0), q(1), q(2)])
+}
+
+/// Morton (Z-order) code of a cell of a 2²¹ grid: the low 21 bits of each
+/// coordinate interleaved, x in bit 0, y in bit 1, z in bit 2 (63 bits).
+/// Public for the writer's vertex-cache order (`lodgen`'s gltf_out).
+#[inline]
+pub fn interleave3(cell: [u64; 3]) -> u64 {
+    spread3(cell[0]) | spread3(cell[1]) << 1 | spread3(cell[2]) << 2
 }
 
 /// Box of the vertices the triangles of the validated `mesh` use.

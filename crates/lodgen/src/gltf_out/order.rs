@@ -118,25 +118,11 @@ fn morton_order(tris: &[[u32; 3]], positions: &[[f32; 3]]) -> Vec<u32> {
                 // (in [0, 2^21 - 1]: the centroid lies in the box)
                 ((c - lo[k] as f64) * scale[k]).clamp(0.0, ((1u32 << 21) - 1) as f64) as u64
             });
-            (
-                spread(cell[0]) | (spread(cell[1]) << 1) | (spread(cell[2]) << 2),
-                i as u32,
-            )
+            (lodgen_pm::metric::interleave3(cell), i as u32)
         })
         .collect();
     keyed.par_sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
-}
-
-/// The 21 low bits of `x` spread to every third bit.
-fn spread(x: u64) -> u64 {
-    let mut x = x & 0x1f_ffff;
-    x = (x | x << 32) & 0x1f_0000_0000_ffff;
-    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-    x = (x | x << 2) & 0x1249_2492_4924_9249;
-    x
 }
 
 #[cfg(test)]
@@ -191,9 +177,9 @@ mod tests {
     }
 
     #[test]
-    fn spread_interleaves_the_bits() {
+    fn morton_codes_interleave_the_bits() {
         for x in [0u64, 1, 2, 5, 0x1f_ffff, 0x15_5555, 123_456] {
-            let s = spread(x);
+            let s = lodgen_pm::metric::interleave3([x, 0, 0]);
             for b in 0..21 {
                 assert_eq!((s >> (3 * b)) & 1, (x >> b) & 1, "bit {b} of {x}");
             }
