@@ -301,7 +301,11 @@ export class ProgressiveMesh extends EventDispatcher {
   // vertex carry several wedges), its position and the streamed attributes
   // three.js draws (NORMAL, TEXCOORD_0..3, COLOR_0, TANGENT) copied from
   // the pair's vertex and wedge at each level. Pairs are numbered in order
-  // of first appearance in the corners, so at most one per corner.
+  // of first appearance in the corners, so at most one per corner; the
+  // vertex attributes are sized for about as many pairs as the stream has
+  // wedges or vertices (spot's finest level: 3,225 pairs for 17,568
+  // corners), a first upload of what is drawn, and grow when a level
+  // draws more (pairCapacity).
   cornerGeometry(g, Pos) {
     const d = this.decoder, h = d.header, n = 3 * h.totalTriangles;
     const names = { NORMAL: "normal", TEXCOORD_0: "uv", TEXCOORD_1: "uv1", TEXCOORD_2: "uv2", TEXCOORD_3: "uv3", COLOR_0: "color", TANGENT: "tangent" };
@@ -315,12 +319,13 @@ export class ProgressiveMesh extends EventDispatcher {
     };
     g.setIndex(new BufferAttribute(this.pairs.index, 1));
     g.index.setUsage(35048);
-    g.setAttribute("position", new BufferAttribute(new Pos(n * 3), 3, this.quantized));
+    this.pairCap = Math.min(n, Math.ceil(1.25 * Math.max(h.wedges.total, h.totalVertices)) + 64);
+    g.setAttribute("position", new BufferAttribute(new Pos(this.pairCap * 3), 3, this.quantized));
     this.channels = [];
     for (const c of h.wedges.channels) {
       const name = names[c.name];
       if (!name || g.attributes[name]) continue;
-      g.setAttribute(name, new BufferAttribute(new Float32Array(n * c.components), c.components));
+      g.setAttribute(name, new BufferAttribute(new Float32Array(this.pairCap * c.components), c.components));
       g.attributes[name].setUsage(35048);
       // TEXCOORD_0 streamed over its range while the file stores it as
       // normalized u16 whose range the material's KHR_texture_transform
@@ -332,9 +337,29 @@ export class ProgressiveMesh extends EventDispatcher {
     }
     if (!g.attributes.normal) {
       // none streamed: each pair gets its vertex's computed normal
-      g.setAttribute("normal", new BufferAttribute(new Int8Array(n * 3), 3, true));
+      g.setAttribute("normal", new BufferAttribute(new Int8Array(this.pairCap * 3), 3, true));
+      g.attributes.normal.setUsage(35048);
       this.vnormal = new Int8Array(h.totalVertices * 3);
     }
+  }
+
+  // Room for `np` pairs in the vertex attributes: when a level draws more
+  // pairs than they hold, each is replaced by one twice as large (at most
+  // one per corner), its values kept; the geometry is disposed so that the
+  // renderer drops the old buffers and uploads the new ones whole.
+  pairCapacity(np) {
+    if (np <= this.pairCap) return;
+    const g = this.geometry, cap = Math.min(3 * this.decoder.header.totalTriangles, Math.max(np, 2 * this.pairCap));
+    for (const name of Object.keys(g.attributes)) {
+      const a = g.attributes[name], b = new a.array.constructor(cap * a.itemSize);
+      b.set(a.array);
+      const r = new BufferAttribute(b, a.itemSize, a.normalized);
+      r.setUsage(a.usage);
+      g.setAttribute(name, r);
+      for (const ch of this.channels) if (ch.attr === a) ch.attr = r;
+    }
+    this.pairCap = cap;
+    g.dispose();
   }
 
   // Number the drawn corners' distinct (vertex, wedge) pairs in order of
@@ -363,6 +388,7 @@ export class ProgressiveMesh extends EventDispatcher {
   // attributes.
   writeCorners() {
     const g = this.geometry, n = 3 * this.nt, vp = this.vpos, np = this.numberPairs();
+    this.pairCapacity(np);
     const { v: pv, w: pw } = this.pairs;
     const pos = g.attributes.position.array, vals = this.decoder.wvals, stride = this.decoder.header.wedges.stride;
     for (let p = 0; p < np; p++) {
