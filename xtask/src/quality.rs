@@ -35,7 +35,10 @@
 //! polishes lodgen's levels as `lodgen --polish` does
 //! (`lodgen_pm::polish_clusters`, `PolishOptions::CLUSTERS`) before they are
 //! measured, `--polish-exact` with `lodgen_pm::polish` (the hierarchies'
-//! closest points, default options).
+//! closest points, default options). `--write-levels DIR` writes the welded
+//! input and lodgen's and meshoptimizer's levels of each mesh as OBJ files
+//! to `DIR` (`quality/levels.rs`), for `lodgen measure`, which says where a
+//! cell's maximum lies.
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -44,6 +47,7 @@ use lodgen_pm::{prepare, simplify, Mesh, SimplifyOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+mod levels;
 mod peers;
 
 use peers::{peer_python, python_peers, PEERS};
@@ -103,6 +107,8 @@ struct Args {
     reach_faces: bool,
     polish: Option<Polish>,
     fresh: bool,
+    /// `--write-levels DIR`: the input and the levels as OBJ files.
+    write_levels: Option<PathBuf>,
 }
 
 /// How `--polish` pairs the surfaces.
@@ -124,6 +130,7 @@ fn parse(args: &[String]) -> Result<Args> {
         reach_faces: false,
         polish: None,
         fresh: false,
+        write_levels: None,
     };
     let mut it = args.iter();
     let mut chosen = false;
@@ -145,9 +152,14 @@ fn parse(args: &[String]) -> Result<Args> {
             "--polish" => out.polish = Some(Polish::Clusters),
             "--polish-exact" => out.polish = Some(Polish::Exact),
             "--fresh" => out.fresh = true,
+            "--write-levels" => {
+                let dir = it.next().context("--write-levels needs a directory")?;
+                out.write_levels = Some(PathBuf::from(dir));
+            }
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach-off, --reach-faces, --polish, --polish-exact, --fresh)"
+                 --reach-off, --reach-faces, --polish, --polish-exact, --fresh, \
+                 --write-levels DIR)"
             ),
         }
     }
@@ -240,6 +252,20 @@ fn meshopt_level(m: &Mesh, target: usize) -> Result<Mesh> {
     })
 }
 
+/// `--write-levels DIR`: the input `m`, lodgen's `levels` and
+/// meshoptimizer's at their counts as OBJ files (`quality/levels.rs`).
+fn write_levels(dir: &Path, name: &str, m: &Mesh, levels: &[Mesh]) -> Result<()> {
+    let all = RATIOS
+        .iter()
+        .zip(levels)
+        .map(|(r, l)| {
+            let percent = (r * 100.0).round() as u32;
+            Ok((percent, l, meshopt_level(m, l.triangles.len())?))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    levels::write_levels(dir, name, m, &all)
+}
+
 fn measure_cell(reference: &Reference, m: &Mesh, opts: &MeasureOptions) -> Result<Cell> {
     let e = reference.measure(MeshRef::new(&m.positions, &m.triangles), opts)?;
     Ok(Cell {
@@ -271,6 +297,9 @@ pub fn run(args: &[String]) -> Result<()> {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
         let levels = lodgen_levels(&m, &args)?;
+        if let Some(dir) = &args.write_levels {
+            write_levels(dir, name, &m, &levels)?;
+        }
         let counts: Vec<usize> = levels.iter().map(|l| l.triangles.len()).collect();
         // levels whose recorded peers' cells may stand (all of them in a
         // quick run, which only says when a count moved)
