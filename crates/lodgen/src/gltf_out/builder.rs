@@ -40,6 +40,9 @@ pub(super) struct MeshoptView {
 pub(super) enum Payload<'a> {
     /// Vertex attribute elements of `stride` bytes each.
     Attribute { bytes: Vec<u8>, stride: usize },
+    /// Vertex attribute elements of `stride` bytes each, as `f32`s (written
+    /// straight into the segment, little-endian).
+    Floats { values: &'a [f32], stride: usize },
     /// A triangle list.
     Indices { indices: &'a [u32], wide: bool },
     /// Opaque bytes (images).
@@ -65,6 +68,44 @@ pub(super) struct Builder {
 pub(super) fn align4(v: &mut Vec<u8>) {
     while v.len() % 4 != 0 {
         v.push(0);
+    }
+}
+
+/// An attribute view's bytes (meshopt-encoded when `compress`), stride,
+/// target and compression record.
+type ViewBytes = (Vec<u8>, Option<usize>, Option<u32>, Option<MeshoptView>);
+
+fn attribute(bytes: Vec<u8>, stride: usize, compress: bool) -> Result<ViewBytes, WriteError> {
+    debug_assert!(stride % 4 == 0 && bytes.len() % stride == 0);
+    let count = bytes.len() / stride;
+    Ok(if compress {
+        let encoded = encode_attribute(&bytes, stride)?;
+        let m = MeshoptView {
+            fallback_offset: 0,
+            uncompressed_length: bytes.len(),
+            stride,
+            count,
+            mode: "ATTRIBUTES",
+        };
+        (encoded, Some(stride), Some(ARRAY_BUFFER), Some(m))
+    } else {
+        (bytes, Some(stride), Some(ARRAY_BUFFER), None)
+    })
+}
+
+/// `indices` appended to `out` as little-endian `u32`, or `u16` unless `wide`.
+fn append_indices(out: &mut Vec<u8>, indices: &[u32], wide: bool) {
+    if wide {
+        out.reserve(indices.len() * 4);
+        for &i in indices {
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+    } else {
+        out.reserve(indices.len() * 2);
+        for &i in indices {
+            debug_assert!(i < 65535);
+            out.extend_from_slice(&(i as u16).to_le_bytes());
+        }
     }
 }
 
@@ -94,24 +135,32 @@ impl Builder {
         payload: Payload<'_>,
     ) -> Result<(usize, usize), WriteError> {
         let compress = self.compress() && segment != SHARED;
+        // uncompressed floats and indices go straight into the segment
+        let payload = match payload {
+            Payload::Floats { values, stride } if !compress => {
+                let data = &mut self.segments[segment];
+                align4(data);
+                let offset = data.len();
+                data.reserve(values.len() * 4);
+                for v in values {
+                    data.extend_from_slice(&v.to_le_bytes());
+                }
+                return Ok(self.push_view(segment, offset, Some(stride), Some(ARRAY_BUFFER)));
+            }
+            Payload::Indices { indices, wide } if !compress => {
+                let data = &mut self.segments[segment];
+                align4(data);
+                let offset = data.len();
+                append_indices(data, indices, wide);
+                return Ok(self.push_view(segment, offset, None, Some(ELEMENT_ARRAY_BUFFER)));
+            }
+            p => p,
+        };
         let (bytes, stride, target, meshopt) = match payload {
             Payload::Raw(bytes) => (bytes, None, None, None),
-            Payload::Attribute { bytes, stride } => {
-                debug_assert!(stride % 4 == 0 && bytes.len() % stride == 0);
-                let count = bytes.len() / stride;
-                if compress {
-                    let encoded = encode_attribute(&bytes, stride)?;
-                    let m = MeshoptView {
-                        fallback_offset: 0,
-                        uncompressed_length: bytes.len(),
-                        stride,
-                        count,
-                        mode: "ATTRIBUTES",
-                    };
-                    (encoded, Some(stride), Some(ARRAY_BUFFER), Some(m))
-                } else {
-                    (bytes, Some(stride), Some(ARRAY_BUFFER), None)
-                }
+            Payload::Attribute { bytes, stride } => attribute(bytes, stride, compress)?,
+            Payload::Floats { values, stride } => {
+                attribute(f32_bytes(values.iter()), stride, compress)?
             }
             Payload::Indices { indices, wide } => {
                 let stride = if wide { 4 } else { 2 };
@@ -128,15 +177,8 @@ impl Builder {
                     };
                     (encoded, None, Some(ELEMENT_ARRAY_BUFFER), Some(m))
                 } else {
-                    let mut bytes = Vec::with_capacity(indices.len() * stride);
-                    for &i in indices {
-                        if wide {
-                            bytes.extend_from_slice(&i.to_le_bytes());
-                        } else {
-                            debug_assert!(i < 65535);
-                            bytes.extend_from_slice(&(i as u16).to_le_bytes());
-                        }
-                    }
+                    let mut bytes = Vec::new();
+                    append_indices(&mut bytes, indices, wide);
                     (bytes, None, Some(ELEMENT_ARRAY_BUFFER), None)
                 }
             }
@@ -160,6 +202,27 @@ impl Builder {
             meshopt,
         });
         Ok((self.views.len() - 1, bytes.len()))
+    }
+
+    /// A view of the bytes of `segment` from `offset` to its end (written
+    /// there already, uncompressed); its index and length.
+    fn push_view(
+        &mut self,
+        segment: usize,
+        offset: usize,
+        stride: Option<usize>,
+        target: Option<u32>,
+    ) -> (usize, usize) {
+        let length = self.segments[segment].len() - offset;
+        self.views.push(View {
+            segment,
+            offset,
+            length,
+            stride,
+            target,
+            meshopt: None,
+        });
+        (self.views.len() - 1, length)
     }
 
     pub(super) fn accessor(&mut self, value: Value) -> usize {
@@ -352,8 +415,8 @@ impl Builder {
             let (lo, hi) = min_max(p.positions.iter().map(|v| v.map(f64::from)));
             let (view, b) = self.view(
                 segment,
-                Payload::Attribute {
-                    bytes: f32_bytes(p.positions.iter().flatten()),
+                Payload::Floats {
+                    values: p.positions.as_flattened(),
                     stride: 12,
                 },
             )?;
@@ -381,8 +444,8 @@ impl Builder {
         } else {
             let (view, b) = self.view(
                 segment,
-                Payload::Attribute {
-                    bytes: f32_bytes(p.normals.iter().flatten()),
+                Payload::Floats {
+                    values: p.normals.as_flattened(),
                     stride: 12,
                 },
             )?;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map, Value};
 
-use super::builder::{align4, Builder, SHARED};
+use super::builder::{Builder, SHARED};
 use super::error::WriteError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -15,14 +15,33 @@ pub(super) enum Format {
     Gltf,
 }
 
+/// A file to write: its bytes as parts written one after the other (the
+/// segments are moved in, never copied into one buffer).
+pub(super) struct OutFile {
+    pub(super) path: PathBuf,
+    pub(super) parts: Vec<Vec<u8>>,
+}
+
+impl OutFile {
+    pub(super) fn len(&self) -> usize {
+        self.parts.iter().map(Vec::len).sum()
+    }
+}
+
 /// Where each segment went: per segment (buffer index, base offset in that
 /// buffer), the buffers, the side files of `.gltf` output and the GLB BIN
-/// chunk.
+/// chunk's parts and length (a multiple of 4).
 struct Placement {
     place: Vec<(usize, usize)>,
     buffers: Vec<Value>,
-    files: Vec<(PathBuf, Vec<u8>)>,
-    bin: Vec<u8>,
+    files: Vec<OutFile>,
+    bin: Vec<Vec<u8>>,
+    bin_len: usize,
+}
+
+/// Zero bytes that bring `len` to a multiple of 4.
+fn padding(len: usize) -> Vec<u8> {
+    vec![0; len.next_multiple_of(4) - len]
 }
 
 impl Builder {
@@ -30,88 +49,51 @@ impl Builder {
     /// `meshes` and the extension lists of `root`, and returns the files to
     /// write (main file first).
     pub(super) fn finish(
-        self,
+        mut self,
         root: &mut Map<String, Value>,
         format: Format,
         path: &Path,
         stem: &str,
-    ) -> Result<Vec<(PathBuf, Vec<u8>)>, WriteError> {
+    ) -> Result<Vec<OutFile>, WriteError> {
         let levels = self.segments.len() - 1;
         // Segment order: shared, then levels coarsest first.
         let order: Vec<usize> = std::iter::once(SHARED).chain((1..=levels).rev()).collect();
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let segments = std::mem::take(&mut self.segments);
         let Placement {
             place,
             mut buffers,
             mut files,
             bin,
-        } = self.place_segments(&order, format, &dir, stem);
+            bin_len,
+        } = place_segments(segments, &order, format, &dir, stem);
         let fallback = self.fallback_buffers(&order, &mut buffers);
         let views = self.buffer_views(&place, &fallback);
         self.fill_root(root, levels, views, buffers);
         let root = Value::Object(std::mem::take(root));
-        let main = match format {
+        let parts = match format {
             Format::Gltf => {
                 let mut json = serde_json::to_vec_pretty(&root)?;
                 json.push(b'\n');
-                json
+                vec![json]
             }
-            Format::Glb => glb(&serde_json::to_vec(&root)?, &bin)?,
+            Format::Glb => glb(&serde_json::to_vec(&root)?, bin, bin_len)?,
         };
-        files.insert(0, (path.to_path_buf(), main));
+        files.insert(
+            0,
+            OutFile {
+                path: path.to_path_buf(),
+                parts,
+            },
+        );
         Ok(files)
-    }
-
-    /// Segments in `order` as one BIN chunk (`.glb`) or one file each
-    /// (`.gltf`, empty segments skipped).
-    fn place_segments(&self, order: &[usize], format: Format, dir: &Path, stem: &str) -> Placement {
-        let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
-        let mut buffers: Vec<Value> = Vec::new();
-        let mut place = vec![(0usize, 0usize); self.segments.len()];
-        let mut bin = Vec::new();
-        match format {
-            Format::Glb => {
-                for &s in order {
-                    align4(&mut bin);
-                    place[s] = (0, bin.len());
-                    bin.extend_from_slice(&self.segments[s]);
-                }
-                align4(&mut bin);
-                if !bin.is_empty() {
-                    buffers.push(json!({"byteLength": bin.len()}));
-                }
-            }
-            Format::Gltf => {
-                for &s in order {
-                    let mut data = self.segments[s].clone();
-                    if data.is_empty() {
-                        continue;
-                    }
-                    align4(&mut data);
-                    let name = if s == SHARED {
-                        format!("{stem}.bin")
-                    } else {
-                        format!("{stem}.lod{}.bin", s - 1)
-                    };
-                    place[s] = (buffers.len(), 0);
-                    buffers.push(json!({"byteLength": data.len(), "uri": uri_escape(&name)}));
-                    files.push((dir.join(&name), data));
-                }
-            }
-        }
-        Placement {
-            place,
-            buffers,
-            files,
-            bin,
-        }
     }
 
     /// With meshopt compression, one placeholder fallback buffer per segment
     /// that has compressed views; returns each segment's fallback buffer
     /// index (`usize::MAX`: none).
     fn fallback_buffers(&self, order: &[usize], buffers: &mut Vec<Value>) -> Vec<usize> {
-        let mut fallback = vec![usize::MAX; self.segments.len()];
+        let mut fallback = vec![usize::MAX; self.fallback_len.len()];
         if self.compress() {
             for &s in order {
                 if self.fallback_len[s] > 0 {
@@ -202,6 +184,68 @@ impl Builder {
     }
 }
 
+/// `segments` in `order` as one BIN chunk (`.glb`) or one file each
+/// (`.gltf`, empty segments skipped), moved into the parts, 4-byte aligned.
+fn place_segments(
+    mut segments: Vec<Vec<u8>>,
+    order: &[usize],
+    format: Format,
+    dir: &Path,
+    stem: &str,
+) -> Placement {
+    let mut files: Vec<OutFile> = Vec::new();
+    let mut buffers: Vec<Value> = Vec::new();
+    let mut place = vec![(0usize, 0usize); segments.len()];
+    let mut bin = Vec::new();
+    let mut bin_len = 0;
+    match format {
+        Format::Glb => {
+            for &s in order {
+                let data = std::mem::take(&mut segments[s]);
+                let pad = padding(bin_len);
+                bin_len += pad.len();
+                place[s] = (0, bin_len);
+                bin_len += data.len();
+                bin.extend([pad, data]);
+            }
+            let pad = padding(bin_len);
+            bin_len += pad.len();
+            bin.push(pad);
+            if bin_len > 0 {
+                buffers.push(json!({"byteLength": bin_len}));
+            }
+        }
+        Format::Gltf => {
+            for &s in order {
+                let data = std::mem::take(&mut segments[s]);
+                if data.is_empty() {
+                    continue;
+                }
+                let pad = padding(data.len());
+                let len = data.len() + pad.len();
+                let name = if s == SHARED {
+                    format!("{stem}.bin")
+                } else {
+                    format!("{stem}.lod{}.bin", s - 1)
+                };
+                place[s] = (buffers.len(), 0);
+                buffers.push(json!({"byteLength": len, "uri": uri_escape(&name)}));
+                files.push(OutFile {
+                    path: dir.join(&name),
+                    parts: vec![data, pad],
+                });
+            }
+        }
+    }
+    Placement {
+        place,
+        buffers,
+        files,
+        bin,
+        bin_len,
+    }
+}
+
 /// Adds `names` to the root's extension list `key`, sorted, without duplicates.
 fn merge_extension_list(root: &mut Map<String, Value>, key: &str, names: Vec<String>) {
     let mut list: Vec<String> = root
@@ -236,32 +280,37 @@ fn uri_escape(name: &str) -> String {
     out
 }
 
-fn glb(json: &[u8], bin: &[u8]) -> Result<Vec<u8>, WriteError> {
+/// The GLB container's parts: header and JSON chunk, then the BIN chunk's
+/// header and `bin` (`bin_len` bytes, a multiple of 4) when not empty.
+fn glb(json: &[u8], bin: Vec<Vec<u8>>, bin_len: usize) -> Result<Vec<Vec<u8>>, WriteError> {
     let mut json = json.to_vec();
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
-    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = 12 + 8 + json.len() + if bin_len == 0 { 0 } else { 8 + bin_len };
     let total = u32::try_from(total).map_err(|_| WriteError::TooLarge)?;
-    let mut out = Vec::with_capacity(total as usize);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&total.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(bin);
+    let mut head = Vec::with_capacity(12 + 8 + json.len() + 8);
+    head.extend_from_slice(b"glTF");
+    head.extend_from_slice(&2u32.to_le_bytes());
+    head.extend_from_slice(&total.to_le_bytes());
+    head.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    head.extend_from_slice(b"JSON");
+    head.extend_from_slice(&json);
+    let mut parts = vec![head];
+    if bin_len > 0 {
+        let mut chunk = Vec::with_capacity(8);
+        chunk.extend_from_slice(&(bin_len as u32).to_le_bytes());
+        chunk.extend_from_slice(b"BIN\0");
+        parts.push(chunk);
+        parts.extend(bin);
     }
-    Ok(out)
+    Ok(parts)
 }
 
 /// Writes every file to a temporary name in its directory, then renames them
 /// (the main file, first in `files`, last). On error, removes whatever it
 /// created.
-pub(super) fn write_atomically(files: &[(PathBuf, Vec<u8>)]) -> Result<(), WriteError> {
+pub(super) fn write_atomically(files: &[OutFile]) -> Result<(), WriteError> {
     let temp_of = |p: &Path| {
         let name = p
             .file_name()
@@ -275,13 +324,13 @@ pub(super) fn write_atomically(files: &[(PathBuf, Vec<u8>)]) -> Result<(), Write
             let _ = std::fs::remove_file(p);
         }
     };
-    for (path, bytes) in files {
-        let temp = temp_of(path);
-        if let Err(source) = std::fs::write(&temp, bytes) {
+    for file in files {
+        let temp = temp_of(&file.path);
+        if let Err(source) = write_parts(&temp, &file.parts) {
             let _ = std::fs::remove_file(&temp);
             cleanup(&temps, &[]);
             return Err(WriteError::Io {
-                path: path.clone(),
+                path: file.path.clone(),
                 source,
             });
         }
@@ -291,12 +340,12 @@ pub(super) fn write_atomically(files: &[(PathBuf, Vec<u8>)]) -> Result<(), Write
     // Side files first, the main file last.
     let order = (1..files.len()).chain(std::iter::once(0));
     for i in order {
-        let (path, _) = &files[i];
+        let path = &files[i].path;
         if let Err(source) = std::fs::rename(&temps[i], path) {
             let pending: Vec<PathBuf> = temps
                 .iter()
                 .enumerate()
-                .filter(|(j, _)| !done.contains(&files[*j].0))
+                .filter(|(j, _)| !done.contains(&files[*j].path))
                 .map(|(_, t)| t.clone())
                 .collect();
             cleanup(&pending, &done);
@@ -306,6 +355,16 @@ pub(super) fn write_atomically(files: &[(PathBuf, Vec<u8>)]) -> Result<(), Write
             });
         }
         done.push(path.clone());
+    }
+    Ok(())
+}
+
+/// Creates (or truncates) `path` and writes `parts` one after the other.
+fn write_parts(path: &Path, parts: &[Vec<u8>]) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut file = std::fs::File::create(path)?;
+    for part in parts {
+        file.write_all(part)?;
     }
     Ok(())
 }

@@ -183,7 +183,7 @@ pub fn write_lods_with(
     write_atomically(&files)?;
     summary.files = files
         .iter()
-        .map(|(p, bytes)| (p.clone(), bytes.len() as u64))
+        .map(|f| (f.path.clone(), f.len() as u64))
         .collect();
     Ok(summary)
 }

@@ -15,6 +15,8 @@
 //! fetched by both): `chunked_order_keeps_the_cache_efficiency`.
 //! Smaller primitives keep meshopt's order of the whole index buffer.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 /// Primitives of more triangles than this are ordered in chunks.
@@ -74,29 +76,7 @@ fn chunked(indices: &[u32], positions: &[[f32; 3]], chunk: usize) -> Vec<u32> {
 /// Triangle numbers sorted by the Morton code of their centroid in the
 /// box of the used positions (21 bits an axis), ties by number.
 fn morton_order(tris: &[[u32; 3]], positions: &[[f32; 3]]) -> Vec<u32> {
-    let (lo, hi) = tris
-        .par_iter()
-        .map(|t| {
-            let mut lo = [f32::INFINITY; 3];
-            let mut hi = [f32::NEG_INFINITY; 3];
-            for &v in t {
-                let p = positions[v as usize];
-                for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-            }
-            (lo, hi)
-        })
-        .reduce(
-            || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
-            |(a, b), (c, d)| {
-                (
-                    std::array::from_fn(|k| a[k].min(c[k])),
-                    std::array::from_fn(|k| b[k].max(d[k])),
-                )
-            },
-        );
+    let (lo, hi) = used_box(tris, positions);
     let scale: [f64; 3] = std::array::from_fn(|k| {
         let extent = hi[k] as f64 - lo[k] as f64;
         if extent > 0.0 {
@@ -109,12 +89,10 @@ fn morton_order(tris: &[[u32; 3]], positions: &[[f32; 3]]) -> Vec<u32> {
         .par_iter()
         .enumerate()
         .map(|(i, t)| {
+            // (each corner read once: the corners lie anywhere in memory)
+            let p = t.map(|v| positions[v as usize]);
             let cell: [u64; 3] = std::array::from_fn(|k| {
-                let c = t
-                    .iter()
-                    .map(|&v| positions[v as usize][k] as f64)
-                    .sum::<f64>()
-                    / 3.0;
+                let c = p.iter().map(|q| q[k] as f64).sum::<f64>() / 3.0;
                 // (in [0, 2^21 - 1]: the centroid lies in the box)
                 ((c - lo[k] as f64) * scale[k]).clamp(0.0, ((1u32 << 21) - 1) as f64) as u64
             });
@@ -123,6 +101,31 @@ fn morton_order(tris: &[[u32; 3]], positions: &[[f32; 3]]) -> Vec<u32> {
         .collect();
     keyed.par_sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// The box of the positions `tris` use: the used vertices marked, then
+/// their positions read in order (exact, so the box of the corners).
+fn used_box(tris: &[[u32; 3]], positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let used: Vec<AtomicBool> = positions.iter().map(|_| AtomicBool::new(false)).collect();
+    tris.par_iter().for_each(|t| {
+        for &v in t {
+            used[v as usize].store(true, Ordering::Relaxed);
+        }
+    });
+    positions
+        .par_iter()
+        .zip(&used)
+        .filter(|(_, u)| u.load(Ordering::Relaxed))
+        .map(|(p, _)| (*p, *p))
+        .reduce(
+            || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+            |(a, b), (c, d)| {
+                (
+                    std::array::from_fn(|k| a[k].min(c[k])),
+                    std::array::from_fn(|k| b[k].max(d[k])),
+                )
+            },
+        )
 }
 
 #[cfg(test)]

@@ -290,25 +290,52 @@ fn normalized(v: [f32; 3]) -> Option<[f32; 3]> {
 
 /// Per-vertex normals as the sum of the incident triangles' unnormalized
 /// normals (weights = twice the areas), normalized; `+Z` where that sum is 0.
+///
+/// On every core: each task owns a range of vertices and walks every
+/// triangle, adding the normals of those with a corner in its range, so
+/// each vertex still sums its triangles in index order (the same bits for
+/// any number of tasks).
 fn area_weighted_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
-    let mut acc = vec![[0.0f64; 3]; positions.len()];
-    for t in indices.chunks_exact(3) {
-        let p = |i: u32| positions[i as usize].map(f64::from);
-        let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        for &i in t {
-            for (s, d) in acc[i as usize].iter_mut().zip(n) {
-                *s += d;
+    let tasks = if indices.len() < PARALLEL_NORMALS_MIN {
+        1
+    } else {
+        rayon::current_num_threads()
+    };
+    normals_in_tasks(positions, indices, tasks)
+}
+
+/// [`area_weighted_normals`] with the vertices split between `tasks` tasks.
+fn normals_in_tasks(positions: &[[f32; 3]], indices: &[u32], tasks: usize) -> Vec<[f32; 3]> {
+    let n = positions.len();
+    let tasks = tasks.max(1);
+    let span = n.div_ceil(tasks).max(1);
+    let mut acc = vec![[0.0f64; 3]; n];
+    acc.par_chunks_mut(span).enumerate().for_each(|(k, acc)| {
+        let owned = k * span..k * span + acc.len();
+        let mine = |i: u32| owned.contains(&(i as usize));
+        for t in indices.chunks_exact(3) {
+            if !(mine(t[0]) || mine(t[1]) || mine(t[2])) {
+                continue;
+            }
+            let p = |i: u32| positions[i as usize].map(f64::from);
+            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            for &i in t {
+                if mine(i) {
+                    for (s, d) in acc[i as usize - owned.start].iter_mut().zip(n) {
+                        *s += d;
+                    }
+                }
             }
         }
-    }
-    acc.iter()
+    });
+    acc.par_iter()
         .map(|n| {
             let len = n[0].hypot(n[1]).hypot(n[2]);
             if len > 0.0 && len.is_finite() {
@@ -324,6 +351,10 @@ fn area_weighted_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3
         .collect()
 }
 
+/// Index count from which [`area_weighted_normals`] splits the vertices
+/// between tasks.
+const PARALLEL_NORMALS_MIN: usize = 3 << 16;
+
 /// Center and uniform half extent of the chain's bounding box (half extent 1
 /// for a degenerate box): [`lodgen_pm::stream::Grid::around`], the one
 /// computation `lodgen::progressive::level_grid` puts the stream on too.
@@ -331,4 +362,63 @@ fn dequantization(levels: &[Vec<Prepared>]) -> ([f64; 3], f64) {
     let used = levels.iter().flatten().flat_map(|p| &p.positions);
     let grid = lodgen_pm::stream::Grid::around(used, 16);
     (grid.center, grid.half)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The normals one task adds up (the writer's code before it split them).
+    fn sequential(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+        let mut acc = vec![[0.0f64; 3]; positions.len()];
+        for t in indices.chunks_exact(3) {
+            let p = |i: u32| positions[i as usize].map(f64::from);
+            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            for &i in t {
+                for (s, d) in acc[i as usize].iter_mut().zip(n) {
+                    *s += d;
+                }
+            }
+        }
+        acc.iter()
+            .map(|n| {
+                let len = n[0].hypot(n[1]).hypot(n[2]);
+                if len > 0.0 && len.is_finite() {
+                    n.map(|c| (c / len) as f32)
+                } else {
+                    [0.0, 0.0, 1.0]
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn split_normals_have_the_bits_of_one_task() {
+        let m = lodgen_pm::shapes::torus_knot(2, 3, 200, 24, 0.05);
+        // triangles in a scrambled order, so that a vertex's fan lies
+        // anywhere in the list and the sums' order matters
+        let k = m.triangles.len();
+        let tris: Vec<[u32; 3]> = (0..k).map(|i| m.triangles[(i * 7919) % k]).collect();
+        let indices: Vec<u32> = tris.into_iter().flatten().collect();
+        let expected = sequential(&m.positions, &indices);
+        // an unused vertex keeps +Z
+        let mut positions = m.positions.clone();
+        positions.push([1.0, 2.0, 3.0]);
+        let mut expected = expected;
+        expected.push([0.0, 0.0, 1.0]);
+        for tasks in [1, 2, 3, 7, 64] {
+            let got = normals_in_tasks(&positions, &indices, tasks);
+            let bits = |v: &[[f32; 3]]| -> Vec<[u32; 3]> {
+                v.iter().map(|n| n.map(f32::to_bits)).collect()
+            };
+            assert_eq!(bits(&got), bits(&expected), "{tasks} tasks");
+        }
+    }
 }
