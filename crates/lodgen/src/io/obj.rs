@@ -63,15 +63,61 @@ pub fn read_obj_with_materials(
 /// already, a batch of lines at a time (the file is never held whole).
 pub(super) fn read_obj_file(
     head: Vec<u8>,
-    file: impl Read,
+    file: impl Read + Send,
     path: &Path,
 ) -> Result<Scene, ReadError> {
     read_obj_batches(head, file, path, BATCH_BYTES, CHUNK_BYTES)
 }
 
-fn read_obj_batches(
+/// Whole lines read from the file: `buf[..cut]`, the rest carried to the
+/// next batch.
+struct Batch {
+    buf: Vec<u8>,
+    cut: usize,
+    end_of_file: bool,
+}
+
+/// Fills `buf` (which holds the previous batch's unfinished line) up to
+/// `capacity` bytes and cuts after its last line end; a line longer than
+/// the buffer doubles `capacity`.
+fn read_batch(
     mut buf: Vec<u8>,
-    mut file: impl Read,
+    file: &mut impl Read,
+    capacity: &mut usize,
+) -> std::io::Result<Batch> {
+    loop {
+        // (`read_to_end` fills spare capacity without zeroing it first)
+        let want = capacity.saturating_sub(buf.len());
+        buf.reserve(want);
+        let n = file.take(want as u64).read_to_end(&mut buf)?;
+        if n < want {
+            let cut = buf.len();
+            return Ok(Batch {
+                buf,
+                cut,
+                end_of_file: true,
+            });
+        }
+        match memchr::memrchr(b'\n', &buf) {
+            Some(i) => {
+                return Ok(Batch {
+                    buf,
+                    cut: i + 1,
+                    end_of_file: false,
+                })
+            }
+            None => *capacity = (*capacity * 2).max(1), // one line longer than the buffer
+        }
+    }
+}
+
+/// The batches in a pipeline: while one batch is parsed (on every core),
+/// the previous batch's chunks go into the primitives and the next batch
+/// is read. Errors come in file order: a batch's parse error before a
+/// read error after it.
+fn read_obj_batches(
+    buf: Vec<u8>,
+    mut file: impl Read + Send,
     path: &Path,
     batch_bytes: usize,
     chunk_bytes: usize,
@@ -80,36 +126,51 @@ fn read_obj_batches(
     let mut b = Builder::new(path, mtl_beside(path));
     let mut counts = Counts::default();
     let mut capacity = batch_bytes.max(buf.len());
+    let mut batch = read_batch(buf, &mut file, &mut capacity).map_err(io_err)?;
+    let mut pending: Option<Vec<Chunk>> = None;
+    let mut spare: Vec<u8> = Vec::new();
     loop {
-        // fill the buffer, then parse up to its last line end
-        // (`read_to_end` fills spare capacity without zeroing it first)
-        let want = capacity - buf.len();
-        buf.reserve(want);
-        let n = (&mut file)
-            .take(want as u64)
-            .read_to_end(&mut buf)
-            .map_err(io_err)?;
-        let end_of_file = n < want;
-        let cut = if end_of_file {
-            buf.len()
-        } else {
-            match memchr::memrchr(b'\n', &buf) {
-                Some(i) => i + 1,
-                None => {
-                    capacity *= 2; // one line longer than the buffer
-                    continue;
-                }
-            }
-        };
-        let (chunks, after) = parse_batch(&buf[..cut], counts, chunk_bytes, path);
+        let Batch {
+            buf,
+            cut,
+            end_of_file,
+        } = batch;
+        let ((added, next), (chunks, after)) = rayon::join(
+            || {
+                let added = pending.take().map_or(Ok(()), |c| b.add_chunks(c));
+                let next = (!end_of_file && added.is_ok()).then(|| {
+                    let mut carried = std::mem::take(&mut spare);
+                    carried.clear();
+                    carried.extend_from_slice(&buf[cut..]);
+                    read_batch(carried, &mut file, &mut capacity)
+                });
+                (added, next)
+            },
+            || parse_batch(&buf[..cut], counts, chunk_bytes, path),
+        );
+        added?;
         counts = after;
-        b.add_chunks(chunks)?;
-        if end_of_file {
-            break;
+        spare = buf;
+        match next {
+            None => {
+                pending = Some(chunks);
+                break;
+            }
+            Some(Ok(next)) => {
+                pending = Some(chunks);
+                batch = next;
+            }
+            Some(Err(e)) => {
+                // this batch's own error comes first
+                b.add_chunks(chunks)?;
+                return Err(io_err(e));
+            }
         }
-        buf.drain(..cut);
     }
-    drop(buf);
+    drop(spare);
+    if let Some(chunks) = pending {
+        b.add_chunks(chunks)?;
+    }
     b.finish()
 }
 
@@ -594,6 +655,66 @@ mod tests {
                     "{bad} {batch} {chunk}"
                 );
             }
+        }
+    }
+
+    /// Fails every read once `limit` bytes were given.
+    struct FailAfter {
+        data: Vec<u8>,
+        at: usize,
+        limit: usize,
+    }
+
+    impl Read for FailAfter {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            if self.at >= self.limit {
+                return Err(std::io::Error::other("the disk went away"));
+            }
+            let n = out.len().min(self.limit - self.at);
+            let n = n.min(self.data.len() - self.at.min(self.data.len()));
+            out[..n].copy_from_slice(&self.data[self.at..self.at + n]);
+            self.at += n;
+            Ok(n)
+        }
+    }
+
+    /// A read error is the file's error unless a line before it is bad
+    /// (batches are read while the one before is parsed).
+    #[test]
+    fn a_bad_line_before_a_read_error_is_the_error() {
+        let text = sample();
+        let lines: Vec<&str> = text.lines().collect();
+        let read_failing = |text: &str, limit: usize, batch: usize| {
+            let r = FailAfter {
+                data: text.as_bytes().to_vec(),
+                at: 0,
+                limit,
+            };
+            read_obj_batches(Vec::new(), r, Path::new("t.obj"), batch, 16)
+        };
+        let half = text.len() / 2;
+        for batch in [64, 300, 4096] {
+            let e = read_failing(&text, half, batch).err();
+            assert!(
+                e.as_ref().is_some_and(|e| *e.kind == ErrorKind::Io),
+                "{batch}: {e:?}"
+            );
+            let mut broken = lines.clone();
+            broken[2] = "v 1 x 2";
+            let broken = broken.join("\n");
+            let e = read_failing(&broken, half, batch).err();
+            // (a first batch that cannot be read whole is the read error)
+            let expected = if batch < half { Some(3) } else { None };
+            assert_eq!(e.and_then(|e| e.line()), expected, "{batch}");
+            let mut late = lines.clone();
+            let last = late.len() - 1;
+            late[last] = "v 1 x 2";
+            let late = late.join("\n");
+            let e = read_failing(&late, half, batch).err();
+            assert!(
+                e.as_ref().is_some_and(|e| *e.kind == ErrorKind::Io),
+                "{batch}: {e:?}"
+            );
         }
     }
 }
