@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // lodgen's three.js loader (crates/lodgen/web/three) in headless Chromium.
 //
-//   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--uv-range UV.glb] [--out DIR]      (or env LODGEN_BIN)
+//   node three-lod.mjs --lodgen BIN FILE.glb [--attributes ATTR.glb] [--uv-range UV.glb] [--float F.glb] [--out DIR]      (or env LODGEN_BIN)
 //
 // FILE.glb is a `lodgen --progressive` output. Expectations come from
 // `BIN view --print-levels FILE.glb` (each level's records, triangles,
@@ -30,6 +30,9 @@
 // KHR_texture_transform): the finest streamed level's UVs are the file's
 // finest level's, in the file's space (each within 1/100 of a u16 step of
 // one of its values, and every one of its values drawn).
+// F.glb (written without --quantize: f32 positions, which the loader
+// computes from the records' grid points): every level draws the level's
+// triangles, index hash and position hash.
 // Exit 0 on success, 1 on failure, 2 on bad usage.
 
 import { execFileSync } from 'node:child_process';
@@ -57,6 +60,7 @@ function parseArgs(argv) {
     else if (a === '--out') o.out = path.resolve(argv[++i]);
     else if (a === '--attributes') o.attributes = argv[++i];
     else if (a === '--uv-range') o.uvRange = argv[++i];
+    else if (a === '--float') o.float = argv[++i];
     else if (a.startsWith('-')) usage(`unknown option ${a}`);
     else o.files.push(a);
   }
@@ -82,6 +86,7 @@ async function main() {
     '/slow.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]), throttle: { bitsPerSecond: 50e6, latencyMs: 5 } },
     ...(o.attributes ? { '/attributes.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.attributes) } } : {}),
     ...(o.uvRange ? { '/uvrange.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.uvRange) } } : {}),
+    ...(o.float ? { '/float.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.float) } } : {}),
   };
   const server = await startServer(routes, requests);
   const base = `http://127.0.0.1:${server.address().port}`;
@@ -162,6 +167,20 @@ async function main() {
       check(/\bnormal\b/.test(last.attributes) && /\buv\b/.test(last.attributes) && last.variance > MIN_VARIANCE,
         `attributes: the finest level draws streamed normals and UVs (${last.attributes}), not blank (variance ${last.variance.toFixed(1)})`);
       await page.screenshot({ path: path.join(o.out, 'three-progressive-attributes.png') });
+    }
+
+    // f32 positions: each level's vertices where Rust decodes them
+    if (o.float) {
+      const want = JSON.parse(execFileSync(o.lodgen, ['view', '--print-levels', o.float], { encoding: 'utf8' })).levels;
+      const f = await page.evaluate(() => window.runProgressive('/float.glb'));
+      check(f.events.length === want.length && !f.quantized, `float: ${f.events.length} level events (expected ${want.length}), f32 positions`);
+      f.events.forEach((e, i) => {
+        const lv = want[want.length - 1 - i];
+        if (!lv) return;
+        check(e.records === lv.records && e.drawn === lv.triangles && e.hash === lv.indexHash && e.pos === lv.positionHash,
+          `float: level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash}, position hash ${e.pos} ` +
+            `(expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.positionHash})`);
+      });
     }
 
     // UVs quantized over their range with KHR_texture_transform: the

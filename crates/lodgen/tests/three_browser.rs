@@ -8,7 +8,8 @@
 //! file through three-gltf-extensions' MSFT_lod plugin with the
 //! `coverageDistance` hook; with the shared assets, spot.obj's stream (UVs
 //! as wedges) drawn with its attributes, each level's corner attribute hash
-//! against Rust's.
+//! against Rust's; the same input without `--quantize` (f32 positions, which
+//! the loader computes from the records' grid points), every level's hashes.
 //!
 //! Needs `node`, Chromium and `tests/js/node_modules`; without them the test
 //! says so and passes, unless `LODGEN_BROWSER_TEST=1` or `CI=true`.
@@ -44,9 +45,20 @@ fn three_loader_streams_every_level_in_headless_chromium() {
         .status()
         .unwrap();
     assert!(status.success());
+    // f32 positions (no --quantize): the loader computes them from the
+    // records' grid points
+    let float = dir.path().join("float.glb");
+    let status = Command::new(bin)
+        .arg(&input)
+        .arg("-o")
+        .arg(&float)
+        .args(["--levels", "100%,50%,10%,2%", "--progressive", "--quiet"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let mut extra = vec!["--float".to_string(), float.to_str().unwrap().to_string()];
     // a stream with wedges (spot.obj's UVs), drawn with its attributes
     let spot = dir.path().join("spot.glb");
-    let mut extra = Vec::new();
     if let Some(input) = lodgen::assets::shared_asset("spot.obj") {
         let status = Command::new(bin)
             .arg(&input)
@@ -57,10 +69,10 @@ fn three_loader_streams_every_level_in_headless_chromium() {
             .status()
             .unwrap();
         assert!(status.success());
-        extra = vec![
+        extra.extend([
             "--attributes".to_string(),
             spot.to_str().unwrap().to_string(),
-        ];
+        ]);
         let uv = dir.path().join("uvrange.glb");
         textured_spot_quantized(&input, &uv);
         extra.extend(["--uv-range".to_string(), uv.to_str().unwrap().to_string()]);

@@ -221,6 +221,8 @@ export class ProgressiveMesh extends EventDispatcher {
     this.json = json;
     this.binStart = binStart;
     this.decoder = new StreamDecoder(meshoptDecoder);
+    // records' positions as grid points only (writeVertices)
+    this.decoder.floats = false;
     const bv = json.bufferViews[found.ext.bufferView];
     this.streamStart = binStart + (bv.byteOffset || 0);
     this.streamLength = bv.byteLength;
@@ -451,15 +453,28 @@ export class ProgressiveMesh extends EventDispatcher {
 
   // Records a .. k's positions, in order: each record's v1 and v0 at their
   // chunk-end grid points, so a level shows exactly its positions even when
-  // the decoder is already further on.
+  // the decoder is already further on; as normalized i16 (q - s), or as
+  // f32 the way the decoder's p1 / p0 are (center + (q - s) / s * half in
+  // double precision, rounded once).
   writeVertices(a, k) {
-    const d = this.decoder, out = this.vpos, s = d.header.scale, base = d.header.baseVertices;
-    const q = this.quantized, f1 = q ? d.q1 : d.p1, f0 = q ? d.q0 : d.p0, off = q ? s : 0;
+    const d = this.decoder, h = d.header, out = this.vpos, s = h.scale, base = h.baseVertices;
+    const f1 = d.q1, f0 = d.q0;
+    if (this.quantized) {
+      for (let i = a; i < k; i++) {
+        const o1 = 3 * d.v1[i], o0 = 3 * (base + i), r = 3 * i;
+        for (let j = 0; j < 3; j++) {
+          out[o1 + j] = f1[r + j] - s;
+          out[o0 + j] = f0[r + j] - s;
+        }
+      }
+      return;
+    }
+    const c = h.center, half = h.half;
     for (let i = a; i < k; i++) {
       const o1 = 3 * d.v1[i], o0 = 3 * (base + i), r = 3 * i;
       for (let j = 0; j < 3; j++) {
-        out[o1 + j] = f1[r + j] - off;
-        out[o0 + j] = f0[r + j] - off;
+        out[o1 + j] = Math.fround(c[j] + ((f1[r + j] - s) / s) * half);
+        out[o0 + j] = Math.fround(c[j] + ((f0[r + j] - s) / s) * half);
       }
     }
   }

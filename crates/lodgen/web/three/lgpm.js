@@ -10,6 +10,7 @@
 //   d.push(bytes);                 // any split of the stream, as it arrives
 //   d.count                        // records decoded so far
 //   d.record(i)                    // {v1, v0, p1, pm, p0, faces, corners, wfaces, wafter, wbefore}
+//                                  // (p1 / pm / p0 null after d.floats = false)
 //
 // A chunk's topology (and wedges) is replayed block by block (BLOCK_RECORDS
 // records each) as soon as each block's columns are in, its positions once
@@ -323,6 +324,13 @@ function columnsIn(b, from, have, n) {
 export class StreamDecoder {
   constructor(meshoptDecoder) {
     this.mo = meshoptDecoder;
+    // whether records get f32 positions (p1, p0, pm) besides their grid
+    // points (q1, q0): a client drawing grid points (the three.js loader on
+    // a KHR_mesh_quantization file, or computing them from q1 / q0 as
+    // deq does) turns it off before pushing bytes, and skips a pass over
+    // the records, the f32 copy of every vertex (`cur`) and their arrays
+    // (bunny-1m: 26 MB of 98); p1 / p0 / pm are then null
+    this.floats = true;
     this.headBytes = new Uint8Array(0); // bytes before the header is parsed
     this.consumed = 0; // stream offset of the current chunk
     this.header = null;
@@ -396,7 +404,8 @@ export class StreamDecoder {
     const f = 3 * this.fStart[i], g = 3 * this.fStart[i + 1], c = this.cStart[i], d = this.cStart[i + 1];
     return {
       v1: this.v1[i], v0: this.header.baseVertices + i,
-      p1: this.p1.subarray(3 * i, 3 * i + 3), pm: this.pm.subarray(3 * i, 3 * i + 3), p0: this.p0.subarray(3 * i, 3 * i + 3),
+      p1: this.p1 && this.p1.subarray(3 * i, 3 * i + 3), pm: this.pm && this.pm.subarray(3 * i, 3 * i + 3),
+      p0: this.p0 && this.p0.subarray(3 * i, 3 * i + 3),
       faces: this.faces0.subarray(f, g), corners: this.corners.a.subarray(c, d),
       wfaces: this.wfaces0 ? this.wfaces0.subarray(f, g) : null,
       wafter: this.wfaces0 ? this.wafter.a.subarray(c, d) : null,
@@ -432,11 +441,11 @@ export class StreamDecoder {
     this.cStart = new Uint32Array(ns + 1);
     this.fStart[0] = h.baseTriangles;
     this.corners = new U32List();
-    this.p1 = new Float32Array(3 * ns);
     this.q1 = new Uint16Array(3 * ns); // grid points of p1 / p0
     this.q0 = new Uint16Array(3 * ns);
-    this.p0 = new Float32Array(3 * ns);
-    this.pm = new Float32Array(3 * ns);
+    this.p1 = this.floats ? new Float32Array(3 * ns) : null;
+    this.p0 = this.floats ? new Float32Array(3 * ns) : null;
+    this.pm = this.floats ? new Float32Array(3 * ns) : null;
     this.scratch = new Uint32Array(64);
     this.ringBuf = new Uint32Array(128); // ring(): 2 per corner at most
     this.movedOf = new Int32Array(h.totalVertices).fill(-1);
@@ -483,8 +492,8 @@ export class StreamDecoder {
     this.baseQ = q.slice(0, 3 * nv);
     this.basePositions = new Float32Array(nv * 3);
     for (let v = 0; v < nv; v++) this.deq(q, v, this.basePositions, 3 * v);
-    this.cur = new Float32Array(h.totalVertices * 3);
-    this.cur.set(this.basePositions, 0);
+    this.cur = this.floats ? new Float32Array(h.totalVertices * 3) : null;
+    if (this.cur) this.cur.set(this.basePositions, 0);
     this.baseReady = true;
   }
 
@@ -937,16 +946,19 @@ export class StreamDecoder {
       q[3 * v0] = e0; q[3 * v0 + 1] = e1; q[3 * v0 + 2] = e2;
     }
     for (const v of moved) slot[v] = -1;
+    const base = this.header.baseVertices, q1 = this.q1, q0 = this.q0;
+    for (let i = first; i < first + n; i++) {
+      const u = 3 * this.v1[i], w = 3 * (base + i), r = 3 * i;
+      q1[r] = q[u]; q1[r + 1] = q[u + 1]; q1[r + 2] = q[u + 2];
+      q0[r] = q[w]; q0[r + 1] = q[w + 1]; q0[r + 2] = q[w + 2];
+    }
+    if (!this.floats) return;
     // replay positions in order: p_merged is the position before the split
     const c = this.cur;
     for (let i = first; i < first + n; i++) {
       const v1 = this.v1[i], v0 = this.header.baseVertices + i;
       this.deq(q, v1, this.p1, 3 * i);
       this.deq(q, v0, this.p0, 3 * i);
-      for (let a = 0; a < 3; a++) {
-        this.q1[3 * i + a] = q[3 * v1 + a];
-        this.q0[3 * i + a] = q[3 * v0 + a];
-      }
       for (let a = 0; a < 3; a++) {
         this.pm[3 * i + a] = c[3 * v1 + a];
         c[3 * v1 + a] = this.p1[3 * i + a];
