@@ -21,19 +21,12 @@
 //! replayed or extracted level, the library, Python and the command all
 //! see the same lifted positions.
 //!
-//! Which vertices: those made by a contraction of two vertices neither
-//! locked nor on a feature line or attribute seam (a vertex with two
-//! wedges is on a seam, so pinned) with optimal placement, when
-//! [`SimplifyOptions::lift`] is on. That includes border corners and
-//! non-manifold vertices (pinned: the simplifier places them at an end of
-//! the pair): such a vertex is logged lifted by the same step, which may
-//! move it along its border lines too (held by their constraint planes),
-//! as it does not change the run. Session 21: positions-only RMS geomean
-//! against the best peer 0.895 → 0.883, mostly beetle's (docs/quality.md
-//! "RMS and attributes (session 21)"). Seam and feature-line vertices are not
-//! lifted: along the normal only, the spot's UV rms rose 6–17 % per level.
-//! The quadrics hold face and border planes only (feature planes are
-//! added to feature vertices alone, and a lifted vertex's cluster holds no
+//! Which vertices: those made by a contraction of two free vertices
+//! (neither locked, pinned nor fixed: no border corner, feature line or
+//! attribute seam vertex — a vertex with two wedges is on a seam, so
+//! pinned) with optimal placement, when [`SimplifyOptions::lift`] is on.
+//! Their quadrics hold face and border planes only (feature planes are
+//! added to feature vertices alone, and a free vertex's cluster holds no
 //! feature vertex: a pinned vertex is never removed into a free one). A
 //! lift that would turn a face of the vertex's fan at that moment by more
 //! than the legality test allows (or collapse it) is refused: the
@@ -99,25 +92,13 @@ impl Simplifier {
     }
 
     /// Whether contracting `v0` into `v1` (before it is made) gives a
-    /// vertex that may be lifted: lift on, optimal placement, neither end
-    /// locked nor on a feature line or seam (free, or a border corner or
-    /// non-manifold vertex: module docs).
+    /// vertex that may be lifted: both free, optimal placement, lift on.
     #[inline]
     pub(super) fn liftable(&self, v0: u32, v1: u32) -> bool {
         self.lifted.is_on()
             && self.opts.placement == Placement::Optimal
-            && self.liftable_end(v0)
-            && self.liftable_end(v1)
-    }
-
-    /// Not locked, not pinned by a feature line or seam, not fixed.
-    #[inline]
-    fn liftable_end(&self, v: u32) -> bool {
-        !self.locked[v as usize]
-            && !self
-                .features
-                .as_ref()
-                .is_some_and(|f| f.pinned(v) || f.fixed(v))
+            && self.free(v0)
+            && self.free(v1)
     }
 
     /// After a contraction into `v1`: the removed `v0`'s last position
@@ -275,33 +256,6 @@ mod tests {
                 .expect("a pool");
             let again = pool.install(|| simplify(&pos, &idx, &opts)).expect("again");
             assert_eq!(&again.pm, pm);
-        }
-    }
-
-    /// A curved patch's border corners (the grid's four) absorb their
-    /// neighbours at their input positions; the log records them lifted
-    /// off those towards their clusters' planes: fails if corners are not
-    /// lifted (they would stay at the input, as the simplifier keeps them).
-    #[test]
-    fn the_border_corners_of_a_curved_patch_are_logged_lifted() {
-        let m = crate::shapes::grid(40, 40, |x, y| 0.6 * (x * x + y * y));
-        let opts = SimplifyOptions::DEFAULT.with_target_ratio(0.05);
-        let on = simplify(&m.positions, &m.triangles.concat(), &opts).expect("simplifies");
-        let off = simplify(&m.positions, &m.triangles.concat(), &opts.with_lift(false))
-            .expect("simplifies");
-        let corners = [0u32, 40, 41 * 40, 41 * 41 - 1];
-        for (pm, lifted) in [(&on.pm, true), (&off.pm, false)] {
-            let k = pm.splits_for_triangles(m.triangles.len() / 10);
-            let level = pm.mesh_at_splits(k);
-            let moved = (0..level.positions.len())
-                .filter(|&i| corners.contains(&pm.vertex_origin[i]))
-                .filter(|&i| level.positions[i] != m.positions[pm.vertex_origin[i] as usize])
-                .count();
-            if lifted {
-                assert!(moved > 0, "no corner lifted");
-            } else {
-                assert_eq!(moved, 0, "a corner moved without the lift");
-            }
         }
     }
 }

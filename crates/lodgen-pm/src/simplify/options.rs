@@ -205,12 +205,10 @@ pub struct SimplifyOptions {
     /// What the run may do to the surface's topology to reach its target
     /// ([`TopologyChange`]; default [`TopologyChange::WhenShort`]).
     pub topology_change: TopologyChange,
-    /// With optimal placement, log each vertex a contraction of two
-    /// vertices off feature lines and seams makes lifted off its pair's
-    /// chord (or, for a border corner or non-manifold vertex, off its input
-    /// position): one damped Newton step on its cluster's quadric
-    /// (`Quadric::lifted`), where the summed quadric was too flat for its
-    /// own minimiser. The contraction order
+    /// With optimal placement, log each vertex a contraction of two free
+    /// vertices makes lifted off its pair's chord: one damped Newton step
+    /// on its cluster's quadric (`Quadric::lifted`), where the summed
+    /// quadric was too flat for its own minimiser. The contraction order
     /// and the topology are the same either way; the progressive mesh,
     /// its stream and every level carry the lifted positions (RMS geomean
     /// against the best peer 0.933 → 0.88, docs/quality.md "Lift in the
