@@ -427,6 +427,23 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// With the coarse stage too (groups of first-stage clusters, at least
+    /// four: 5,120 triangles in clusters of 20 to 40, to at most 1.5 %):
+    /// every invariant, the same log for any thread count.
+    #[test]
+    fn coarse_partitioned_runs_keep_every_invariant(seed in any::<u64>(), ratio in 0.0f64..0.015, size in 20usize..40, wedges in any::<bool>()) {
+        let noisy = noisy(icosphere(4), seed, 0.05);
+        let m = prepare(&noisy.positions, &noisy.indices()).unwrap().mesh;
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+        let pm = partitioned(&m, &opts, size, wedges);
+        check_levels(&pm, true);
+        prop_assert_eq!(pm.full_in_input_order(), m);
+    }
+}
+
 #[test]
 fn partitioned_cow_replays_exactly_and_differs_from_the_whole_mesh_walk_below_7_5_percent() {
     let Some(text) = common::shared_asset_text("cow.obj") else {

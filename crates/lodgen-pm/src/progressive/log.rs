@@ -164,20 +164,25 @@ impl Log {
         self.wedges.resize(self.corners.len() - 1, e);
     }
 
-    /// Rewrites the corner arena in record order, after `records` were
-    /// reordered (`moved` ranges pointing anywhere into the arena): each
+    /// Rewrites the corner arena in record order, after `records[first..]`
+    /// were reordered (their `moved` ranges pointing anywhere into the
+    /// arena past the earlier records' corners, which stay in order): each
     /// record's corners then follow the previous record's, as `push_corner`
     /// leaves them (`pop` and `spell_out_wedges` rely on it). Without
     /// wedge edits (they are not reordered).
-    pub fn reorder_corners(&mut self) {
+    pub fn reorder_corners_from(&mut self, first: usize) {
         debug_assert!(self.wedges.is_empty());
-        let mut corners = Vec::with_capacity(self.corners.capacity());
-        for r in &mut self.records {
-            let start = corners.len() as u32;
+        let keep = self.records[..first]
+            .last()
+            .map_or(0, |r| r.moved.end as usize);
+        let mut corners = Vec::with_capacity(self.corners.len() - keep);
+        for r in &mut self.records[first..] {
+            let start = (keep + corners.len()) as u32;
             corners.extend_from_slice(&self.corners[r.moved.start as usize..r.moved.end as usize]);
-            r.moved = start..corners.len() as u32;
+            r.moved = start..(keep + corners.len()) as u32;
         }
-        self.corners = corners;
+        self.corners.truncate(keep);
+        self.corners.extend_from_slice(&corners);
     }
 
     /// Drops records `m..` with their corners and wedge edits, and returns

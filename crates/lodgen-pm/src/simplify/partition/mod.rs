@@ -30,8 +30,12 @@
 //! the contractions of two clusters commute:
 //! the logs are merged into one valid sequence in a fixed order (by round,
 //! then by the running maximum of the errors of the cluster's round, then
-//! cluster, then step, which keeps each cluster's order), and the whole
-//! mesh continues with the usual passes, the borders now free.
+//! cluster, then step, which keeps each cluster's order). A run to 2 %
+//! or less of a mesh of at least `4 × 16` clusters then makes a coarse
+//! stage (`coarse.rs`): groups of 16 consecutive clusters simplified the
+//! same way from 15 % to 4 % of the input, holding only the groups'
+//! borders. Then the whole mesh continues with the usual passes, the
+//! borders now free.
 //!
 //! Runs with the pass schedule and without τ pairs, to at most `KEEP / 2`
 //! of the input, on meshes of at least `MIN_CLUSTERS` clusters, take this
@@ -44,16 +48,18 @@
 //! merged order. Seams (wedges that differ at a vertex) and attribute
 //! quadrics keep the whole-mesh walk.
 
+mod coarse;
+mod merge;
+
 use super::{Pass, Simplifier, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
-use crate::progressive::{Contraction, Corner, Log};
-use crate::simplify::heap::{f32_order_key, Buckets, QuadHeap};
+use crate::progressive::Log;
+use crate::simplify::heap::{Buckets, QuadHeap};
 use crate::simplify::quadric::Quadric;
 use crate::simplify::schedule::{pass_bucket, pass_order};
 use crate::simplify::stats::Rejections;
 use crate::simplify::Schedule;
 use rayon::prelude::*;
-use smallvec::SmallVec;
 
 /// Meshes of fewer clusters than this keep the whole-mesh walk: on the
 /// bunny (69,451 triangles, four clusters) partitioning raised the RMS
@@ -96,13 +102,34 @@ const BATCH: usize = 16;
 /// each `None` once its last cluster is built.
 type Blocks<'a> = (&'a [Option<Vec<Quadric>>], &'a [Option<Vec<[f32; 3]>>]);
 
+/// A cluster's triangles in the whole mesh's numbering.
+enum Tris {
+    /// A run of triangles: local triangle `t` is global `start + t` (the
+    /// first stage's clusters).
+    Run(u32),
+    /// Local triangle `t` is global `ids[t]` (the coarse clusters': the
+    /// live triangles of their run).
+    List(Vec<u32>),
+}
+
+impl Tris {
+    /// The global triangle of local triangle `t`.
+    #[inline]
+    fn global(&self, t: u32) -> u32 {
+        match self {
+            Tris::Run(start) => start + t,
+            Tris::List(ids) => ids[t as usize],
+        }
+    }
+}
+
 /// A simplified cluster: its numbering and its simplifier after the run.
 struct Local {
     /// Local vertex → global vertex (increasing, so ties between pairs of
     /// equal cost break as in the global numbering).
     verts: Vec<u32>,
-    /// Its first triangle: local triangles are global `start..`.
-    start: u32,
+    /// Its triangles' global numbers.
+    tris: Tris,
     /// Local vertex → held (not interior): never contracted.
     held: Vec<bool>,
     /// The log's length at the end of each round.
@@ -113,7 +140,7 @@ struct Local {
 /// A cluster's log and numbering, kept for the merge.
 struct Done {
     verts: Vec<u32>,
-    start: u32,
+    tris: Tris,
     rounds: Vec<u32>,
     log: Log,
 }
@@ -167,24 +194,7 @@ impl Simplifier {
         drop(home);
         self.tri_alive = Vec::new();
         let stop = (KEEP * nt as f64) as usize;
-        let mut live = self.live_tris;
-        for _ in 0..MAX_ROUNDS {
-            if live <= stop {
-                break;
-            }
-            let removed = round(&mut locals, live, live - self.target, live - stop, factor);
-            live -= removed;
-            if removed < live / 100 {
-                break; // the held borders block the rest
-            }
-        }
-        for l in &mut locals {
-            // what the write-back and the merge do not read
-            l.s.vtris = Fans::default();
-            l.s.pass = Pass::default();
-            l.s.mark = Vec::new();
-            l.s.locked = Vec::new();
-        }
+        rounds(&mut locals, self.live_tris, self.target, stop, factor);
         // (zeroed pages, mapped as the write-back reaches them while it
         // frees the clusters' copies: the whole mesh's arrays and the
         // clusters' are never resident at once; the held vertices, spread
@@ -204,6 +214,7 @@ impl Simplifier {
         self.merge_logs(done);
         let alive = &self.tri_alive;
         self.vtris = Fans::new(nv, &self.tris, |t| alive[t]);
+        self.run_coarse(size, factor);
     }
 
     /// The clusters of `size` triangles, built a batch at a time from the
@@ -276,11 +287,33 @@ impl Simplifier {
         &self,
         c: u32,
         size: usize,
-        mut own: Vec<[u32; 3]>,
+        own: Vec<[u32; 3]>,
         home: &[u32],
-        blocks: Blocks<'_>,
+        (quads, poss): Blocks<'_>,
     ) -> Local {
         let start = c as usize * size;
+        let fetch = |g: usize| {
+            let quadric = quads[g / BLOCK].as_ref();
+            let position = poss[g / BLOCK].as_ref();
+            (
+                quadric.expect("a block of quadrics outlives its last cluster")[g % BLOCK],
+                position.expect("a block of positions outlives its last cluster")[g % BLOCK],
+            )
+        };
+        self.numbered(c, Tris::Run(start as u32), own, home, fetch)
+    }
+
+    /// Cluster `c` of the triangles `own` (global ids, numbered `tris`) as
+    /// a simplifier of its own, its vertices' quadrics and positions
+    /// `fetch`ed by global id.
+    fn numbered(
+        &self,
+        c: u32,
+        tris: Tris,
+        mut own: Vec<[u32; 3]>,
+        home: &[u32],
+        fetch: impl Fn(usize) -> (Quadric, [f32; 3]),
+    ) -> Local {
         let mut verts: Vec<u32> = own.iter().flatten().copied().collect();
         verts.sort_unstable();
         verts.dedup();
@@ -289,10 +322,10 @@ impl Simplifier {
             *t = t.map(local);
         }
         let held: Vec<bool> = verts.iter().map(|&g| home[g as usize] != c).collect();
-        let s = self.local(&verts, own, &held, blocks);
+        let s = self.local(&verts, own, &held, fetch);
         Local {
             verts,
-            start: start as u32,
+            tris,
             held,
             rounds: Vec::new(),
             s,
@@ -300,32 +333,31 @@ impl Simplifier {
     }
 
     /// A simplifier over the vertices `verts` (global ids) and `tris`
-    /// (local ids) with this one's flags and the quadrics and positions of
-    /// `blocks` (of `BLOCK` vertices), the `held` ones locked.
+    /// (local ids) with this one's flags and lift bits and the quadrics
+    /// and positions `fetch` gives, the `held` ones locked.
     fn local(
         &self,
         verts: &[u32],
         tris: Vec<[u32; 3]>,
         held: &[bool],
-        (quads, poss): Blocks<'_>,
+        fetch: impl Fn(usize) -> (Quadric, [f32; 3]),
     ) -> Simplifier {
         let nv = verts.len();
         let nt = tris.len();
         let get = |g: &u32| *g as usize;
-        let quadric = |g: &u32| {
-            let block = quads[get(g) / BLOCK].as_ref();
-            block.expect("a block of quadrics outlives its last cluster")[get(g) % BLOCK]
-        };
-        let position = |g: &u32| {
-            let block = poss[get(g) / BLOCK].as_ref();
-            block.expect("a block of positions outlives its last cluster")[get(g) % BLOCK]
-        };
+        let (quadric, pos) = verts.iter().map(|&g| fetch(g as usize)).unzip();
         let vtris = Fans::new(nv, &tris, |_| true);
+        let mut lifted = super::lift::Lifted::new(nv, self.lifted.is_on());
+        for (i, &g) in verts.iter().enumerate() {
+            // (none before the first stage; the coarse clusters' vertices
+            // made by the first may be)
+            lifted.set(i as u32, self.lifted.get(g));
+        }
         Simplifier {
             opts: self.opts,
             target: 0,
-            pos: verts.iter().map(position).collect(),
-            quadric: verts.iter().map(quadric).collect(),
+            pos,
+            quadric,
             tris,
             tri_alive: vec![true; nt],
             vtris,
@@ -359,7 +391,7 @@ impl Simplifier {
             features: self.features.as_ref().map(|f| f.restricted(verts)),
             attributes: None,
             meter: None,
-            lifted: super::lift::Lifted::new(nv, self.lifted.is_on()),
+            lifted,
         }
     }
 
@@ -368,7 +400,7 @@ impl Simplifier {
     fn write_back(&mut self, l: Local) -> Done {
         let Local {
             verts,
-            start,
+            tris: ids,
             held,
             rounds,
             s,
@@ -384,18 +416,18 @@ impl Simplifier {
                 self.lifted.set(g as u32, s.lifted.get(i as u32));
             }
         }
-        let start = start as usize;
         for (t, tri) in s.tris.iter().enumerate() {
-            self.tris[start + t] = tri.map(|x| verts[x as usize]);
-            self.tri_alive[start + t] = s.tri_alive[t];
+            let g = ids.global(t as u32) as usize;
+            self.tris[g] = tri.map(|x| verts[x as usize]);
+            self.tri_alive[g] = s.tri_alive[t];
         }
         if let Some(f) = &mut self.features {
             // one wedge per vertex: each corner's wedge is its vertex's
             // (a dead triangle's as it died: its corners stay as they were)
             if let (Some(w), Some(vw)) = (&mut f.wedges, &f.vertex_wedge) {
-                let range = start..start + s.tris.len();
-                for (wt, tri) in w[range.clone()].iter_mut().zip(&self.tris[range]) {
-                    *wt = tri.map(|v| vw[v as usize]);
+                for t in 0..s.tris.len() as u32 {
+                    let g = ids.global(t) as usize;
+                    w[g] = self.tris[g].map(|v| vw[v as usize]);
                 }
             }
         }
@@ -406,97 +438,33 @@ impl Simplifier {
         add_rejections(&mut self.stats.rejected, &s.stats.rejected);
         Done {
             verts,
-            start: start as u32,
+            tris: ids,
             rounds,
             log: s.log,
         }
     }
-
-    /// Append the clusters' records to the log in one fixed order: by
-    /// round (as the whole-mesh walk's passes), then by the running maximum
-    /// of the errors of the cluster's round (so a prefix of a round is
-    /// about as even in error as a pass's), then by cluster and step (so
-    /// each cluster keeps its own order).
-    ///
-    /// Memory: the records are appended in cluster order, each cluster's
-    /// log freed once copied, then permuted into the merged order in place
-    /// and the corners rewritten in that order (the clusters' logs and the
-    /// merged one were both alive: bunny-4m's run peaked here).
-    fn merge_logs(&mut self, done: Vec<Done>) {
-        debug_assert!(self.log.records.is_empty() && self.log.mark() == 0);
-        let total: usize = done.iter().map(|d| d.log.records.len()).sum();
-        let corners: usize = done.iter().map(|d| d.log.mark() as usize).sum();
-        let mut order: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(total);
-        let mut first = 0;
-        for (c, d) in done.iter().enumerate() {
-            let mut from = 0;
-            for (k, &to) in d.rounds.iter().enumerate() {
-                let mut run = 0;
-                for i in from..to {
-                    run = f32_order_key(d.log.records[i as usize].error).max(run);
-                    order.push((k as u32, run, c as u32, first + i));
-                }
-                from = to;
-            }
-            first += d.log.records.len() as u32;
-        }
-        order.par_sort_unstable();
-        // the merged order as positions in the clusters' concatenation
-        let mut perm: Vec<u32> = order.iter().map(|o| o.3).collect();
-        drop(order);
-        self.log.records.reserve(total);
-        self.log.reserve_corners(corners);
-        for d in done {
-            for r in &d.log.records {
-                let mark = self.log.mark();
-                for k in d.log.moved(r) {
-                    self.log.push_corner(Corner {
-                        triangle: d.start + k.triangle,
-                        slot: k.slot,
-                    });
-                }
-                let removed: SmallVec<[u32; 2]> =
-                    d.log.removed(r).iter().map(|&t| d.start + t).collect();
-                let removed = self.log.removed_of(&removed);
-                self.log.records.push(Contraction {
-                    v0: d.verts[r.v0 as usize],
-                    v1: d.verts[r.v1 as usize],
-                    p1: r.p1,
-                    removed,
-                    moved: mark..self.log.mark(),
-                    error: r.error,
-                });
-            }
-        }
-        permute(&mut self.log.records, &mut perm);
-        drop(perm);
-        self.log.reorder_corners();
-        if let Some(f) = &mut self.features {
-            // the feature lines as the contractions in this order leave
-            // them (the clusters' edits of a held vertex's neighbours,
-            // e.g. along an open border, meet here)
-            for r in &self.log.records {
-                f.contract(r.v0, r.v1);
-            }
-        }
-    }
 }
 
-/// Reorders `items` in place so that item `j` becomes the one at
-/// `perm[j]` (a permutation of `0..items.len()`), one cycle at a time by
-/// swaps; `perm` is consumed (entries set to `u32::MAX` once placed).
-fn permute<T>(items: &mut [T], perm: &mut [u32]) {
-    debug_assert_eq!(items.len(), perm.len());
-    for j in 0..perm.len() {
-        let mut k = j;
-        // (the item due at `k` is `perm[k]`; `j`'s old item travels along)
-        while perm[k] != u32::MAX && perm[k] as usize != j {
-            let src = perm[k] as usize;
-            items.swap(k, src);
-            perm[k] = u32::MAX;
-            k = src;
+/// Rounds over the clusters (`live` triangles in all, the whole mesh's
+/// target `target`) until `stop` triangles live, `MAX_ROUNDS` were made,
+/// or a round removed less than 1 % (the held borders block the rest);
+/// then frees what the write-back and the merge do not read.
+fn rounds(locals: &mut [Local], mut live: usize, target: usize, stop: usize, factor: f32) {
+    for _ in 0..MAX_ROUNDS {
+        if live <= stop {
+            break;
         }
-        perm[k] = u32::MAX;
+        let removed = round(locals, live, live - target, live - stop, factor);
+        live -= removed;
+        if removed < live / 100 {
+            break; // the held borders block the rest
+        }
+    }
+    for l in locals {
+        l.s.vtris = Fans::default();
+        l.s.pass = Pass::default();
+        l.s.mark = Vec::new();
+        l.s.locked = Vec::new();
     }
 }
 
@@ -644,14 +612,22 @@ mod tests {
     /// lines right: after the write-back and the merge, every live
     /// vertex's feature neighbours are its open-border neighbours in the
     /// current mesh, as the serial walk keeps them, and every corner's
-    /// wedge is its vertex's. (Fails when the merge does not replay
+    /// wedge is its vertex's; so too after the coarse stage (a grid of
+    /// 72 clusters: 5 coarse ones, which take the run below the first
+    /// stage's stop). (Fails when the merge does not replay
     /// `Features::contract`: a held vertex on the open border keeps a
     /// removed neighbour.)
     #[test]
     fn clusters_keep_the_feature_lines_and_wedges() {
-        let m = shapes::grid(60, 60, |x, y| 0.1 * (7.0 * x).sin() * (5.0 * y).cos());
+        for (n, coarse) in [(60, false), (120, true)] {
+            clusters_keep_features(n, coarse);
+        }
+    }
+
+    fn clusters_keep_features(n: u32, coarse: bool) {
+        let m = shapes::grid(n, n, |x, y| 0.1 * (7.0 * x).sin() * (5.0 * y).cos());
         let opts = SimplifyOptions::DEFAULT
-            .with_target_ratio(0.02)
+            .with_target_ratio(0.015)
             .with_partition(Some(400));
         let mut s = Simplifier::new(&m, &opts).unwrap();
         // features on (no edge of their own): the open border is a feature
@@ -662,6 +638,9 @@ mod tests {
         let size = s.partition_size().expect("a partitioned run");
         s.run_partitioned(size);
         assert!(s.log.records.len() > m.triangles.len() / 4);
+        // the coarse stage ran (or not): below the first stage's stop
+        let nt = m.triangles.len() as f64;
+        assert_eq!((s.live_tris as f64) < 0.75 * KEEP * nt, coarse, "{n}");
         let live: Vec<[u32; 3]> = (0..s.tris.len())
             .filter(|&t| s.tri_alive[t])
             .map(|t| s.tris[t])
@@ -692,39 +671,6 @@ mod tests {
             }
             None => assert!(f.corners_implied),
         }
-    }
-
-    /// `permute` puts item `perm[j]` at `j` for permutations made of
-    /// fixed points, one long cycle and many short ones; fails when a
-    /// cycle is followed the wrong way (`items[perm[j]] = items[j]`) or
-    /// left unfinished.
-    #[test]
-    fn permute_places_each_item_where_the_permutation_says() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        for n in [0usize, 1, 2, 7, 1000] {
-            let mut perm: Vec<u32> = (0..n as u32).collect();
-            // a shuffle, leaving some fixed points
-            for i in (1..n).rev() {
-                x ^= x << 13;
-                x ^= x >> 7;
-                x ^= x << 17;
-                if x % 5 != 0 {
-                    perm.swap(i, (x % (i as u64 + 1)) as usize);
-                }
-            }
-            let items: Vec<String> = (0..n).map(|i| format!("item {i}")).collect();
-            let want: Vec<String> = perm.iter().map(|&p| items[p as usize].clone()).collect();
-            let mut got = items.clone();
-            let mut p = perm.clone();
-            permute(&mut got, &mut p);
-            assert_eq!(got, want, "n = {n}");
-        }
-        // one cycle through every item
-        let n = 10u32;
-        let mut perm: Vec<u32> = (0..n).map(|j| (j + 3) % n).collect();
-        let mut got: Vec<u32> = (0..n).collect();
-        permute(&mut got, &mut perm);
-        assert_eq!(got, (0..n).map(|j| (j + 3) % n).collect::<Vec<_>>());
     }
 
     /// Fails if `Quadric` gains a field whose default is not all-zero bits.
