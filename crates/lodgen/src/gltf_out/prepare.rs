@@ -317,15 +317,7 @@ fn normals_in_tasks(positions: &[[f32; 3]], indices: &[u32], tasks: usize) -> Ve
             if !(mine(t[0]) || mine(t[1]) || mine(t[2])) {
                 continue;
             }
-            let p = |i: u32| positions[i as usize].map(f64::from);
-            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
+            let n = doubled_area_normal(positions, t);
             for &i in t {
                 if mine(i) {
                     for (s, d) in acc[i as usize - owned.start].iter_mut().zip(n) {
@@ -351,6 +343,19 @@ fn normals_in_tasks(positions: &[[f32; 3]], indices: &[u32], tasks: usize) -> Ve
         .collect()
 }
 
+/// Cross product of triangle `t`'s edges in f64: its normal, twice its area long.
+fn doubled_area_normal(positions: &[[f32; 3]], t: &[u32]) -> [f64; 3] {
+    let p = |i: u32| positions[i as usize].map(f64::from);
+    let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
 /// Index count from which [`area_weighted_normals`] splits the vertices
 /// between tasks.
 const PARALLEL_NORMALS_MIN: usize = 3 << 16;
@@ -372,15 +377,7 @@ mod tests {
     fn sequential(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
         let mut acc = vec![[0.0f64; 3]; positions.len()];
         for t in indices.chunks_exact(3) {
-            let p = |i: u32| positions[i as usize].map(f64::from);
-            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
+            let n = doubled_area_normal(positions, t);
             for &i in t {
                 for (s, d) in acc[i as usize].iter_mut().zip(n) {
                     *s += d;
