@@ -111,6 +111,20 @@ function attributeHash(p) {
   return f.value();
 }
 
+// An order-independent hash of the first `nt` triangles of `idx` (each
+// triangle's corners in order): the sum of a hash per triangle. The loader
+// may draw a level's triangles in another order than its index state
+// (order.js): the same triangles, the same sum.
+function triangleSetHash(idx, nt) {
+  let sum = 0;
+  for (let t = 0; t < 3 * nt; t += 3) {
+    const f = fnv();
+    f.put(idx[t]); f.put(idx[t + 1]); f.put(idx[t + 2]);
+    sum = (sum + f.value()) >>> 0;
+  }
+  return sum;
+}
+
 function clear() {
   for (const o of [...scene.children]) if (!o.isLight) scene.remove(o);
 }
@@ -161,7 +175,12 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
     // (the hash below is the check's, not the loader's)
     const ev = { level: e.level, records: e.records, triangles: e.triangles,
       hash: hash ? indexHash(p) : 0, pos: hash ? positionHash(p) : 0, attr: hash ? attributeHash(p) : null,
-      attributes: Object.keys(p.geometry.attributes).sort().join(' ') };
+      attributes: Object.keys(p.geometry.attributes).sort().join(' '),
+      // without wedges, the drawn index buffer against the index state
+      // (the same triangles; `reordered`: in another array, order.js)
+      drawnSet: hash && !p.cw ? triangleSetHash(p.geometry.index.array, p.nt) : 0,
+      stateSet: hash && !p.cw ? triangleSetHash(p.indices, p.nt) : 0,
+      reordered: p.geometry.index.array !== p.indices };
     events.push(ev);
     if (render === 'each') { show([ev]); return; }
     waiting.push(ev);

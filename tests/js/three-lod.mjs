@@ -80,7 +80,7 @@ async function main() {
     '/': { type: 'text/html; charset=utf-8', body: Buffer.from(HTML) },
     '/page.js': {
       type: 'text/javascript; charset=utf-8',
-      body: await bundle('three-lod-page.js', ['../../crates/lodgen/web/three/index.js', '../../crates/lodgen/web/three/lgpm.js']),
+      body: await bundle('three-lod-page.js', ['../../crates/lodgen/web/three/index.js', '../../crates/lodgen/web/three/lgpm.js', '../../crates/lodgen/web/three/order.js']),
     },
     '/model.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]) },
     '/slow.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.files[0]), throttle: { bitsPerSecond: 50e6, latencyMs: 5 } },
@@ -114,6 +114,9 @@ async function main() {
         `level ${e.level}: ${e.records} records, drew ${e.drawn} triangles, hash ${e.hash}, position hash ${e.pos} ` +
           `(expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.positionHash}) at ${e.t.toFixed(0)} ms`);
     });
+    check(r.events.every((e) => e.drawnSet === e.stateSet) && r.events[r.events.length - 1].reordered,
+      `every level draws its index state's triangles (order-independent hashes ${r.events.map((e) => `${e.drawnSet}/${e.stateSet}`).join(', ')}), ` +
+        `the finest in the split tree's draw order (${r.events.map((e) => e.reordered).join(', ')})`);
     check(r.firstPixel.drawn === want[0].triangles && r.firstPixel.variance > MIN_VARIANCE,
       `first pixel: the coarsest level drawn (${r.firstPixel.drawn} triangles, variance ${r.firstPixel.variance.toFixed(1)}) at ${r.firstPixel.t.toFixed(0)} ms`);
     check(r.coarseTriangles === want[0].triangles,
@@ -141,6 +144,8 @@ async function main() {
       const s = await page.evaluate((m) => window.runProgressive('/model.glb', { stopAt: m, prefetch: 'none' }), mid);
       const last = s.events[s.events.length - 1];
       const stopBytes = s.received, fullBytes = r.received;
+      check(last.drawnSet === last.stateSet && last.reordered && s.events.slice(0, -1).every((e) => !e.reordered && e.drawnSet === e.stateSet),
+        `stopped at level ${mid}: drawn in the split tree's order, its index state's triangles (${last.drawnSet}/${last.stateSet}); the levels before it in the state's order`);
       check(last.records === levels[mid].records && last.drawn === levels[mid].triangles,
         `stopped at level ${mid}: ${last.records} records, ${last.drawn} triangles drawn (` +
           `${stopBytes} stream bytes read; to the finest ${fullBytes})`);

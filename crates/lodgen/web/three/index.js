@@ -34,6 +34,7 @@ import {
   Vector3,
 } from "three";
 import { StreamDecoder, parseHeader } from "./lgpm.js";
+import { splitTreeOrder } from "./order.js";
 
 const EXTENSION = "LODGEN_progressive";
 
@@ -223,6 +224,12 @@ export class ProgressiveMesh extends EventDispatcher {
     this.decoder = new StreamDecoder(meshoptDecoder);
     // records' positions as grid points only (writeVertices)
     this.decoder.floats = false;
+    // the level refine stops at is drawn in the split tree's order
+    // (order.js), worked out once its chunk's topology is in, while its
+    // positions still download (drawOrderFor)
+    this.decoder.onTopology = (k) => this.drawOrderFor(k, this.decoder.tri);
+    this.goal = 0; // the records refine stops at (the furthest asked for)
+    this.drawOrder = null; // {records, index}: the triangles in draw order
     const bv = json.bufferViews[found.ext.bufferView];
     this.streamStart = binStart + (bv.byteOffset || 0);
     this.streamLength = bv.byteLength;
@@ -240,7 +247,8 @@ export class ProgressiveMesh extends EventDispatcher {
     this.timeline = [];
     // main-thread ms spent so far: decoding the stream, applying records
     // (index edits, positions, corner copies), computing normals
-    this.spent = { decode: 0, apply: 0, normals: 0 };
+    // (and ordering the last level's triangles: order)
+    this.spent = { decode: 0, apply: 0, normals: 0, order: 0 };
   }
 
   // Once chunk 0 (header + base mesh) is decoded: set up the geometry
@@ -484,13 +492,23 @@ export class ProgressiveMesh extends EventDispatcher {
     const g = this.geometry, p = g.attributes.position;
     p.clearUpdateRanges();
     g.index.clearUpdateRanges();
+    // the level refine stops at in its draw order (else the index state):
+    // a switch of arrays uploads every drawn index
+    if (this.applied === this.goal) this.drawOrderFor(this.applied, this.indices);
+    const o = this.drawOrder, drawn = o && o.records === this.applied && this.applied > 0 ? o.index : this.indices;
+    if (g.index.array !== drawn) {
+      g.index.array = drawn;
+      iFrom = 0;
+      iTo = 3 * this.nt;
+    }
     if (vTo > vFrom) p.addUpdateRange(3 * vFrom, 3 * (vTo - vFrom));
     if (iTo > iFrom) g.index.addUpdateRange(iFrom, iTo - iFrom);
     p.needsUpdate = true;
     g.index.needsUpdate = true;
     g.setDrawRange(0, 3 * this.nt);
     const normal = g.attributes.normal;
-    this.computeNormals(normal.array);
+    // (summed in the drawn order: in the split tree's, the reads are local)
+    this.computeNormals(normal.array, drawn);
     normal.clearUpdateRanges();
     normal.addUpdateRange(0, 3 * (this.decoder.header.baseVertices + this.applied));
     normal.needsUpdate = true;
@@ -500,15 +518,15 @@ export class ProgressiveMesh extends EventDispatcher {
   // positions (grid points: one scale on every axis, so the directions are
   // the positions'),
   // as snorm8 like `--quantize` writes them, into `out` (3 per vertex).
-  computeNormals(out) {
+  computeNormals(out, idx = this.indices) {
     const t = performance.now();
-    this.sumNormals(out);
+    this.sumNormals(out, idx);
     this.spent.normals += performance.now() - t;
     return out;
   }
 
-  sumNormals(out) {
-    const d = this.decoder, q = this.vpos, idx = this.indices, n3 = 3 * this.nt;
+  sumNormals(out, idx) {
+    const d = this.decoder, q = this.vpos, n3 = 3 * this.nt;
     const nv = d.header.baseVertices + this.applied;
     const acc = this.normalSums || (this.normalSums = new Float32Array(3 * d.header.totalVertices));
     acc.fill(0, 0, 3 * nv);
@@ -617,9 +635,9 @@ export class ProgressiveMesh extends EventDispatcher {
     }
     this.received += bytes.length;
     if (this.received === this.streamLength) this.mark("stream last bytes");
-    const t = performance.now();
+    const t = performance.now(), o0 = this.spent.order;
     this.decoder.push(bytes);
-    this.spent.decode += performance.now() - t;
+    this.spent.decode += performance.now() - t - (this.spent.order - o0);
     this.fetched = this.decoder.chunksDone;
     this.wake();
   }
@@ -647,6 +665,24 @@ export class ProgressiveMesh extends EventDispatcher {
     const t = performance.now(), n0 = this.spent.normals;
     this.applyRecords(k);
     this.spent.apply += performance.now() - t - (this.spent.normals - n0);
+  }
+
+  // When k is the level refine stops at: its triangles in the split
+  // tree's draw order (order.js), from `tri`, an index state after record
+  // k: the decoder's once the topology of records 0 .. k is replayed (its
+  // onTopology, at a chunk's end, before the chunk's positions download),
+  // else the loader's own once the level is applied (finishUpdate draws
+  // the level in that order). Not for streams with wedges (their drawn
+  // index is per (vertex, wedge) pair).
+  drawOrderFor(k, tri) {
+    const d = this.decoder, h = d.header;
+    if (k !== this.goal || k === 0 || h.wedges || (this.drawOrder && this.drawOrder.records === k)) return;
+    const t = performance.now();
+    const index = this.drawOrder ? this.drawOrder.index : new Uint32Array(Math.max(3, 3 * h.totalTriangles));
+    splitTreeOrder(tri, d.fStart[k], d.v1, h.baseVertices, k, index);
+    this.drawOrder = { records: k, index };
+    this.spent.order += performance.now() - t;
+    this.mark(`draw order ${k}`);
   }
 
   applyRecords(k) {
@@ -694,6 +730,7 @@ export class ProgressiveMesh extends EventDispatcher {
   async refine(level = 0) {
     await this.start();
     const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
+    this.goal = Math.max(this.goal, want);
     const h = this.decoder.header;
     const chunkOf = (k) => h.chunks.findIndex((c) => c.records >= k);
     this.request(chunkOf(want));

@@ -340,6 +340,11 @@ export class StreamDecoder {
     this.buf = null; // the current chunk's bytes, `have` of them in
     this.have = 0;
     this.topo = null; // the current chunk's topology, replayed before its positions
+    // called with k once the topology of records 0 .. k is replayed (a
+    // chunk's end, before its positions): tri[0 .. 3 * nt] then holds
+    // the index state after record k (the three.js loader orders the
+    // triangles it will draw meanwhile)
+    this.onTopology = null;
   }
 
   // Take the next bytes of the stream (any split); decodes what is whole:
@@ -729,6 +734,8 @@ export class StreamDecoder {
       if (!extra.done() || !mask.done()) throw new Error("escape or corner-mask values left over");
       if (topo.wc) topo.wc.finish();
       topo.done += m;
+      // the chunk's topology is whole: tri holds the index state after it
+      if (topo.done === n && this.onTopology) this.onTopology(topo.first + n);
     }
     if (!whole) return;
     const { first, va } = topo;
