@@ -12,7 +12,8 @@
 // mesh) with GLTFLoader + MeshoptDecoder until drawn; P.glb with lodgen's
 // loader (coarsest level drawn = first pixel; every level applied and drawn
 // = full detail; the page draws once per task, as a render loop would once
-// per frame, so levels applied in one go share a draw; `--render each`: a
+// per frame, so levels applied in one go share a draw, and draws a frame, not
+// waited for, on the loader's "prepare" event; `--render each`: a
 // draw on every level event; `--hold-ms`: the loader's holdMs, default its
 // own). A draw is timed until one pixel is read
 // back (the frame done), without the checks' screenshot. Prints each run,

@@ -47,14 +47,15 @@ function draw(pixels = true) {
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(w * h * 4);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-  let s = 0, s2 = 0;
+  let s = 0, s2 = 0, image = 0x811c9dc5;
   for (let i = 0; i < px.length; i += 4) {
+    image = Math.imul(image ^ (px[i] | (px[i + 1] << 8) | (px[i + 2] << 16)), 0x01000193) >>> 0;
     const l = 0.299 * px[i] + 0.587 * px[i + 1] + 0.114 * px[i + 2];
     s += l;
     s2 += l * l;
   }
   const n = px.length / 4;
-  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2, ms: t0() - start };
+  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2, image, ms: t0() - start };
 }
 
 // FNV-1a 32 over u32 words, little-endian (view.rs index_hash / attribute_hash)
@@ -133,7 +134,8 @@ function clear() {
 // Progressive: level events with drawn triangles, hash, pixels; timings.
 // `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
 // passed: the stream beyond its base is fetched when `refine` asks);
-// `holdMs` too (undefined: the loader's default).
+// `holdMs` too (undefined: the loader's default). `then`: a level refined
+// to once `stopAt` is shown.
 // `render`: 'each' draws on every level event (what the checks compare);
 // 'task' draws once per task as a render loop would per frame (the bench):
 // levels the loader applies in one go, their bytes being in already, share
@@ -145,7 +147,7 @@ function clear() {
 // the events, `draws` (each draw's start and
 // ms), the loader's timeline and main-thread `spent` ms, and the bytes a
 // full load needs (`fullBytes`: up to the stream's end).
-window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
+window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
@@ -168,9 +170,21 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
     const at = t0() - start, d = draw(loop ? 'none' : pixels);
     draws.push({ t: at, ms: d.ms });
     const t = t0() - start;
-    for (const e of ev) Object.assign(e, { drawn: d.triangles, variance: d.variance, t });
+    for (const e of ev) Object.assign(e, { drawn: d.triangles, variance: d.variance, image: d.image, t });
     last = ev;
   };
+  // the geometry holding the next level's topology before its positions:
+  // a render loop draws it in its next frame (the bench: a frame not
+  // waited for; 'each': drawn, its image kept to compare with the level's)
+  const prepared = [];
+  p.addEventListener('prepare', (e) => {
+    const ev = { records: e.records, triangles: e.triangles, t: t0() - start };
+    prepared.push(ev);
+    if (render === 'each') {
+      const d = draw(pixels);
+      Object.assign(ev, { drawn: d.triangles, image: d.image });
+    } else setTimeout(() => { const at = t0() - start; draws.push({ t: at, ms: draw('none').ms }); }, 0);
+  });
   p.addEventListener('level', (e) => {
     // (the hash below is the check's, not the loader's)
     const ev = { level: e.level, records: e.records, triangles: e.triangles,
@@ -188,6 +202,10 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
   });
   await p.refine(stopAt);
   await drawn;
+  if (then !== undefined) {
+    await p.refine(then);
+    await drawn;
+  }
   if (loop && last) {
     // the last frame drawn: wait for it
     const gl = renderer.getContext();
@@ -197,7 +215,7 @@ window.runProgressive = async (url, { stopAt = 0, keep = false, hash = true, pre
     for (const e of last) e.t = t;
   }
   if (keep) window.progressive = p;
-  return { firstPixel, events, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
+  return { firstPixel, events, prepared, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
     draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength };
 };
 

@@ -136,6 +136,22 @@ async function main() {
           `finest ${h.events[h.events.length - 1].drawn} triangles`);
     }
 
+    // stopped at level 1, then refined to the finest: the finest level's
+    // topology goes into the geometry before its positions ("prepare"),
+    // drawn as level 1, pixel for pixel
+    if (levels.length >= 3) {
+      const q = await page.evaluate(() => window.runProgressive('/model.glb', { stopAt: 1, prefetch: 'none', then: 0 }));
+      const fin = q.events[q.events.length - 1], before = q.events[q.events.length - 2], pr = q.prepared[0];
+      check(q.prepared.length === 1 && pr.records === levels[0].records && pr.triangles === levels[0].triangles && pr.t <= fin.t,
+        `prepare: ${q.prepared.length} event(s) (expected 1, for the finest level's ${levels[0].records} records and ` +
+          `${levels[0].triangles} triangles: ${pr ? `${pr.records}, ${pr.triangles}` : 'none'})`);
+      check(pr && pr.drawn === levels[0].triangles && before && pr.image === before.image,
+        `prepare: the finest level's ${pr ? pr.drawn : '?'} triangles drawn as the level before it (image ${pr ? pr.image : '?'}, ` +
+          `level ${before ? before.level : '?'}'s ${before ? before.image : '?'})`);
+      check(fin.records === levels[0].records && fin.hash === levels[0].indexHash && fin.pos === levels[0].positionHash && fin.drawnSet === fin.stateSet,
+        `prepare: the finest level then drawn with its hashes (${fin.hash}, ${fin.pos}; expected ${levels[0].indexHash}, ${levels[0].positionHash})`);
+    }
+
     // stop at a middle level, the stream beyond its base asked for only by
     // refine (no prefetch: a range request): no chunk beyond it is fetched
     if (levels.length >= 3) {

@@ -7,6 +7,7 @@
 //   const p = await loadProgressive("model.glb", { loader, meshoptDecoder: MeshoptDecoder });
 //   scene.add(p.gltf.scene);                    // the coarsest level, at once
 //   p.addEventListener("level", (e) => render()); // e.level (finest = 0), e.triangles
+//   p.addEventListener("prepare", () => render()); // optional (see prepare)
 //   await p.refine();                           // or p.refine(level): stop at a level
 //
 // loadProgressive reads the file from its start in one request, as the
@@ -227,7 +228,10 @@ export class ProgressiveMesh extends EventDispatcher {
     // the level refine stops at is drawn in the split tree's order
     // (order.js), worked out once its chunk's topology is in, while its
     // positions still download (drawOrderFor)
-    this.decoder.onTopology = (k) => this.drawOrderFor(k, this.decoder.tri);
+    this.decoder.onTopology = (k) => {
+      this.drawOrderFor(k, this.decoder.tri);
+      this.prepare(k);
+    };
     this.goal = 0; // the records refine stops at (the furthest asked for)
     this.drawOrder = null; // {records, index}: the triangles in draw order
     const bv = json.bufferViews[found.ext.bufferView];
@@ -491,20 +495,23 @@ export class ProgressiveMesh extends EventDispatcher {
     if (this.cw) { this.writeCorners(); return; }
     const g = this.geometry, p = g.attributes.position;
     p.clearUpdateRanges();
-    g.index.clearUpdateRanges();
     // the level refine stops at in its draw order (else the index state):
-    // a switch of arrays uploads every drawn index
+    // a switch of arrays uploads every drawn index; the draw order
+    // prepare put in is uploaded already, or its update still pending
     if (this.applied === this.goal) this.drawOrderFor(this.applied, this.indices);
     const o = this.drawOrder, drawn = o && o.records === this.applied && this.applied > 0 ? o.index : this.indices;
-    if (g.index.array !== drawn) {
-      g.index.array = drawn;
-      iFrom = 0;
-      iTo = 3 * this.nt;
+    if (g.index.array !== drawn || drawn === this.indices) {
+      g.index.clearUpdateRanges();
+      if (g.index.array !== drawn) {
+        g.index.array = drawn;
+        iFrom = 0;
+        iTo = 3 * this.nt;
+      }
+      if (iTo > iFrom) g.index.addUpdateRange(iFrom, iTo - iFrom);
+      g.index.needsUpdate = true;
     }
     if (vTo > vFrom) p.addUpdateRange(3 * vFrom, 3 * (vTo - vFrom));
-    if (iTo > iFrom) g.index.addUpdateRange(iFrom, iTo - iFrom);
     p.needsUpdate = true;
-    g.index.needsUpdate = true;
     g.setDrawRange(0, 3 * this.nt);
     const normal = g.attributes.normal;
     // (summed in the drawn order: in the split tree's, the reads are local)
@@ -635,9 +642,10 @@ export class ProgressiveMesh extends EventDispatcher {
     }
     this.received += bytes.length;
     if (this.received === this.streamLength) this.mark("stream last bytes");
-    const t = performance.now(), o0 = this.spent.order;
+    // (onTopology's draw order and prepare count as theirs)
+    const t = performance.now(), o0 = this.spent.order + this.spent.apply;
     this.decoder.push(bytes);
-    this.spent.decode += performance.now() - t - (this.spent.order - o0);
+    this.spent.decode += performance.now() - t - (this.spent.order + this.spent.apply - o0);
     this.fetched = this.decoder.chunksDone;
     this.wake();
   }
@@ -678,11 +686,49 @@ export class ProgressiveMesh extends EventDispatcher {
     const d = this.decoder, h = d.header;
     if (k !== this.goal || k === 0 || h.wedges || (this.drawOrder && this.drawOrder.records === k)) return;
     const t = performance.now();
-    const index = this.drawOrder ? this.drawOrder.index : new Uint32Array(Math.max(3, 3 * h.totalTriangles));
+    // (a new array while the one there is drawn: it is the GPU's until replaced)
+    const old = this.drawOrder && this.drawOrder.index, g = this.geometry;
+    const index = old && !(g && g.index.array === old) ? old : new Uint32Array(Math.max(3, 3 * h.totalTriangles));
     splitTreeOrder(tri, d.fStart[k], d.v1, h.baseVertices, k, index);
     this.drawOrder = { records: k, index };
     this.spent.order += performance.now() - t;
     this.mark(`draw order ${k}`);
+  }
+
+  // Once the topology of the level refine stops at (records .. k, the
+  // decoder's onTopology) is in and every record before its chunk is
+  // applied: the geometry takes that level's triangles (its draw order)
+  // before their positions come, each new vertex where the vertex it
+  // splits is drawn now, with its normal, so every new face is degenerate
+  // and the picture is the current level's; then a "prepare" event. A
+  // frame drawn meanwhile (a render loop's next) uploads the level's
+  // index buffer (bunny-1m: 13 MB of the 18 MB the finest level uploads)
+  // while its positions still download; the level itself then uploads
+  // positions and normals only.
+  prepare(k) {
+    const d = this.decoder, h = d.header, g = this.geometry, o = this.drawOrder, a = this.applied;
+    if (!g || this.cw || !o || o.records !== k || a >= k) return;
+    const c = h.chunks.findIndex((x) => x.records >= k);
+    if (c <= 0 || h.chunks[c - 1].records !== a) return;
+    const t = performance.now(), base = h.baseVertices, v1 = d.v1, pos = this.vpos, nrm = g.attributes.normal.array;
+    for (let i = a; i < k; i++) {
+      const u = 3 * v1[i], w = 3 * (base + i);
+      pos[w] = pos[u]; pos[w + 1] = pos[u + 1]; pos[w + 2] = pos[u + 2];
+      nrm[w] = nrm[u]; nrm[w + 1] = nrm[u + 1]; nrm[w + 2] = nrm[u + 2];
+    }
+    g.index.array = o.index;
+    g.index.clearUpdateRanges();
+    g.index.addUpdateRange(0, 3 * d.fStart[k]);
+    for (const attr of [g.attributes.position, g.attributes.normal]) {
+      attr.clearUpdateRanges();
+      attr.addUpdateRange(3 * (base + a), 3 * (k - a));
+      attr.needsUpdate = true;
+    }
+    g.index.needsUpdate = true;
+    g.setDrawRange(0, 3 * d.fStart[k]);
+    this.spent.apply += performance.now() - t;
+    this.mark(`prepared ${k}`);
+    this.dispatchEvent({ type: "prepare", records: k, triangles: d.fStart[k] });
   }
 
   applyRecords(k) {
