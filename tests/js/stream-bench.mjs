@@ -75,7 +75,8 @@ function breakdown(prog, floorFull) {
   const last = at('stream last bytes');
   const tl = prog.timeline, k = tl.length;
   // marks after the last bytes: decoded K, indices K, vertices K, applied K
-  const tail = { decode: NaN, apply: NaN, draw: prog.draws[prog.draws.length - 1].ms };
+  const lastDraw = prog.draws[prog.draws.length - 1];
+  const tail = { decode: NaN, apply: NaN, draw: lastDraw.ms };
   const dec = tl.findIndex((x, i) => i > 0 && x.what.startsWith('decoded ') && x.t >= last);
   if (dec >= 0) {
     tail.decode = tl[dec].t - last;
@@ -84,6 +85,8 @@ function breakdown(prog, floorFull) {
   }
   return {
     lag: last - floorFull, tail: full - last, tailDecode: tail.decode, tailApply: tail.apply, finalDraw: tail.draw,
+    // bytes the final draw handed to WebGL buffers (MB)
+    finalUpload: lastDraw.uploaded / 1e6,
     parse: at('coarse parsed') - at('coarse bytes'), decode: prog.spent.decode, apply: prog.spent.apply,
     normals: prog.spent.normals, order: prog.spent.order, draws: prog.draws.length, drawMs: prog.draws.reduce((a, d) => a + d.ms, 0), marks: k,
   };
@@ -160,7 +163,7 @@ async function main() {
       runs.firstRatio.push(prog.firstPixel.t / plain.t);
       const parts = breakdown(prog, floorOf(prog.fullBytes));
       runs.parts.push(parts);
-      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs, frame: plainFrame.wall, frameCpu: plainFrame.cpu });
+      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs, upload: plain.uploaded / 1e6, frame: plainFrame.wall, frameCpu: plainFrame.cpu });
       parts.frame = progFrame.wall;
       parts.frameCpu = progFrame.cpu;
       console.log(`run ${r + 1}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive first pixel ` +
@@ -173,7 +176,8 @@ async function main() {
         console.log(`  plain: loaded ${(plain.loaded - plainFloor).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms, then a frame ${plainFrame.wall.toFixed(0)} ms, GPU CPU ${plainFrame.cpu.toFixed(0)} ms ` +
           `(progressive at full detail ${progFrame.wall.toFixed(0)} ms, GPU CPU ${progFrame.cpu.toFixed(0)} ms); ` +
           `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
-          `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)}); whole load: parse ${parts.parse.toFixed(0)}, ` +
+          `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)} uploading ${parts.finalUpload.toFixed(2)} MB; plain's draw ` +
+          `${(plain.uploaded / 1e6).toFixed(2)} MB); whole load: parse ${parts.parse.toFixed(0)}, ` +
           `decode ${parts.decode.toFixed(0)}, apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, draw order ${parts.order.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
       }
       if (prog.events[prog.events.length - 1].drawn !== plain.drawn) errors.push(`full detail draws ${prog.events[prog.events.length - 1].drawn} triangles, plain ${plain.drawn}`);
@@ -190,7 +194,7 @@ async function main() {
     fullRatio: stats(runs.ratio), firstRatio: stats(runs.firstRatio),
     // medians over the runs, ms (see breakdown)
     parts: Object.fromEntries(Object.keys(runs.parts[0]).map((k) => [k, med((p) => p[k])])),
-    plainParts: Object.fromEntries(['lag', 'draw', 'frame', 'frameCpu'].map((k) => [k, med((p) => p[k], runs.plainParts)])),
+    plainParts: Object.fromEntries(['lag', 'draw', 'upload', 'frame', 'frameCpu'].map((k) => [k, med((p) => p[k], runs.plainParts)])),
   };
   res.plainMs = res.plain.median;
   res.firstPixelMs = res.firstPixel.median;
@@ -201,7 +205,8 @@ async function main() {
     const q = res.parts;
     console.log(`${o.name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
       `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}, ` +
-      `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)}); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
+      `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)} uploading ${q.finalUpload.toFixed(2)} MB, ` +
+      `plain's ${res.plainParts.upload.toFixed(2)} MB); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
       `decode ${q.decode.toFixed(0)}, apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, draw order ${q.order.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms; ` +
       `a frame once loaded: plain ${res.plainParts.frame.toFixed(0)} ms (GPU process CPU ${res.plainParts.frameCpu.toFixed(0)} ms), ` +
       `progressive ${q.frame.toFixed(0)} ms (GPU process CPU ${q.frameCpu.toFixed(0)} ms)`);

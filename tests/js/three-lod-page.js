@@ -19,6 +19,28 @@ const sun = new THREE.DirectionalLight(0xffffff, 1.5);
 sun.position.set(1, 2, 3);
 scene.add(sun);
 
+// Bytes handed to WebGL buffers so far (bufferData / bufferSubData on the
+// renderer's context): what a draw uploads (the bench).
+let uploaded = 0;
+{
+  const gl = renderer.getContext();
+  const bytes = (src, offset, length) => {
+    if (typeof src === 'number') return src;
+    if (!src || src.byteLength === undefined) return 0;
+    const k = src.BYTES_PER_ELEMENT || 1;
+    return length ? length * k : src.byteLength - (offset || 0) * k;
+  };
+  const sub = gl.bufferSubData.bind(gl), data = gl.bufferData.bind(gl);
+  gl.bufferSubData = (target, at, src, offset, length) => {
+    uploaded += bytes(src, offset, length);
+    return offset === undefined ? sub(target, at, src) : sub(target, at, src, offset, length || 0);
+  };
+  gl.bufferData = (target, src, usage, offset, length) => {
+    uploaded += bytes(src, offset, length);
+    return offset === undefined ? data(target, src, usage) : data(target, src, usage, offset, length || 0);
+  };
+}
+
 function frame(object) {
   const sphere = new THREE.Box3().setFromObject(object).getBoundingSphere(new THREE.Sphere());
   camera.position.copy(sphere.center).add(new THREE.Vector3(0.6, 0.35, 1).normalize().multiplyScalar(sphere.radius * 2.6));
@@ -36,13 +58,14 @@ function frame(object) {
 // nothing back (a render loop's frame: the GPU finishes it while the page
 // goes on; ms is the time to submit it).
 function draw(pixels = true) {
-  const start = t0();
+  const start = t0(), u0 = uploaded;
   renderer.render(scene, camera);
+  const up = uploaded - u0;
   const gl = renderer.getContext();
-  if (pixels === 'none') return { triangles: renderer.info.render.triangles, variance: NaN, ms: t0() - start };
+  if (pixels === 'none') return { triangles: renderer.info.render.triangles, variance: NaN, uploaded: up, ms: t0() - start };
   if (!pixels) {
     gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
-    return { triangles: renderer.info.render.triangles, variance: NaN, ms: t0() - start };
+    return { triangles: renderer.info.render.triangles, variance: NaN, uploaded: up, ms: t0() - start };
   }
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(w * h * 4);
@@ -55,7 +78,7 @@ function draw(pixels = true) {
     s2 += l * l;
   }
   const n = px.length / 4;
-  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2, image, ms: t0() - start };
+  return { triangles: renderer.info.render.triangles, variance: s2 / n - (s / n) ** 2, image, uploaded: up, ms: t0() - start };
 }
 
 // FNV-1a 32 over u32 words, little-endian (view.rs index_hash / attribute_hash)
@@ -158,7 +181,7 @@ window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = tru
   const draws = [];
   const timedDraw = () => {
     const at = t0() - start, d = draw(pixels);
-    draws.push({ t: at, ms: d.ms });
+    draws.push({ t: at, ms: d.ms, uploaded: d.uploaded });
     return d;
   };
   const first = timedDraw();
@@ -168,7 +191,7 @@ window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = tru
   const loop = render === 'task' && pixels === false;
   const show = (ev) => {
     const at = t0() - start, d = draw(loop ? 'none' : pixels);
-    draws.push({ t: at, ms: d.ms });
+    draws.push({ t: at, ms: d.ms, uploaded: d.uploaded });
     const t = t0() - start;
     for (const e of ev) Object.assign(e, { drawn: d.triangles, variance: d.variance, image: d.image, t });
     last = ev;
@@ -183,7 +206,7 @@ window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = tru
     if (render === 'each') {
       const d = draw(pixels);
       Object.assign(ev, { drawn: d.triangles, image: d.image });
-    } else setTimeout(() => { const at = t0() - start; draws.push({ t: at, ms: draw('none').ms }); }, 0);
+    } else setTimeout(() => { const at = t0() - start, d = draw('none'); draws.push({ t: at, ms: d.ms, uploaded: d.uploaded }); }, 0);
   });
   p.addEventListener('level', (e) => {
     // (the hash below is the check's, not the loader's)
@@ -263,7 +286,7 @@ window.runPlain = async (url, { pixels = true } = {}) => {
   scene.add(gltf.scene);
   frame(gltf.scene);
   const d = draw(pixels);
-  return { drawn: d.triangles, variance: d.variance, t: t0() - start, loaded, drawMs: d.ms };
+  return { drawn: d.triangles, variance: d.variance, t: t0() - start, loaded, drawMs: d.ms, uploaded: d.uploaded };
 };
 
 // The same file without the progressive plugin, through three-gltf-extensions'

@@ -22,25 +22,29 @@
 // returned.
 export function splitTreeOrder(tri, nt, v1, baseVertices, records, out) {
   const nv = baseVertices + records;
-  // each vertex's children (its splits, in record order) by a counting sort
-  const first = new Uint32Array(nv + 1);
-  for (let i = 0; i < records; i++) first[v1[i] + 1]++;
-  for (let v = 0; v < nv; v++) first[v + 1] += first[v];
-  const kids = new Uint32Array(Math.max(1, records)), fill = first.slice(0, nv);
-  for (let i = 0; i < records; i++) kids[fill[v1[i]]++] = baseVertices + i;
-  // preorder ranks: roots in their order, then each vertex's subtree
-  // (children pushed in record order, so the latest split's subtree comes
-  // first: it holds the finest patch next to its parent)
-  const rank = new Uint32Array(nv), stack = fill;
-  let sp = 0, r = 0;
-  for (let root = baseVertices - 1; root >= 0; root--) stack[sp++] = root;
-  while (sp > 0) {
-    const v = stack[--sp];
-    rank[v] = r++;
-    for (let k = first[v], e = first[v + 1]; k < e; k++) stack[sp++] = kids[k];
+  // subtree sizes: a vertex's children are later records (their v1 is
+  // it), so one pass from the last record adds each subtree, finished, to
+  // its parent's (one more entry: the counting sort's below)
+  const size = new Uint32Array(nv + 1).fill(1);
+  for (let i = records - 1; i >= 0; i--) size[v1[i]] += size[baseVertices + i];
+  // preorder ranks: roots in their order, each vertex before its subtree,
+  // its children's subtrees latest split first (it holds the finest patch
+  // next to its parent): in record order, each child takes the last free
+  // run of its parent's range (end: one past it)
+  const rank = new Uint32Array(nv), end = new Uint32Array(nv);
+  for (let v = 0, r = 0; v < baseVertices; v++) {
+    rank[v] = r;
+    r += size[v];
+    end[v] = r;
+  }
+  for (let i = 0; i < records; i++) {
+    const p = v1[i], v = baseVertices + i, r = end[p] - size[v];
+    end[p] = r;
+    rank[v] = r;
+    end[v] = r + size[v];
   }
   // triangles by the smallest rank of their corners (a counting sort, stable)
-  const key = new Uint32Array(nt), start = first;
+  const key = new Uint32Array(nt), start = size;
   start.fill(0);
   for (let t = 0, o = 0; t < nt; t++, o += 3) {
     const a = rank[tri[o]], b = rank[tri[o + 1]], c = rank[tri[o + 2]];
