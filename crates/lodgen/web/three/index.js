@@ -697,7 +697,7 @@ export class ProgressiveMesh extends EventDispatcher {
 
   // Once the topology of the level refine stops at (records .. k, the
   // decoder's onTopology) is in and every record before its chunk is
-  // applied: the geometry takes that level's triangles (its draw order)
+  // applied (whichever comes last: refine calls it after a level too): the geometry takes that level's triangles (its draw order)
   // before their positions come, each new vertex where the vertex it
   // splits is drawn now, with its normal, so every new face is degenerate
   // and the picture is the current level's; then a "prepare" event. A
@@ -707,7 +707,7 @@ export class ProgressiveMesh extends EventDispatcher {
   // positions and normals only.
   prepare(k) {
     const d = this.decoder, h = d.header, g = this.geometry, o = this.drawOrder, a = this.applied;
-    if (!g || this.cw || !o || o.records !== k || a >= k) return;
+    if (!g || this.cw || !o || o.records !== k || a >= k || this.prepared === k) return;
     const c = h.chunks.findIndex((x) => x.records >= k);
     if (c <= 0 || h.chunks[c - 1].records !== a) return;
     const t = performance.now(), base = h.baseVertices, v1 = d.v1, pos = this.vpos, nrm = g.attributes.normal.array;
@@ -727,6 +727,7 @@ export class ProgressiveMesh extends EventDispatcher {
     g.index.needsUpdate = true;
     g.setDrawRange(0, 3 * d.fStart[k]);
     this.spent.apply += performance.now() - t;
+    this.prepared = k;
     this.mark(`prepared ${k}`);
     this.dispatchEvent({ type: "prepare", records: k, triangles: d.fStart[k] });
   }
@@ -798,6 +799,9 @@ export class ProgressiveMesh extends EventDispatcher {
         }
         this.baseShown = true;
         this.dispatchEvent({ type: "level", level: k > 0 ? this.levels.indexOf(k) : this.levels.length - 1, records: k, triangles: this.nt });
+        // the decoder ahead (a busy main thread): the last level's topology
+        // came before this level was applied
+        if (k > 0 && this.decoder.count < this.goal) this.prepare(this.goal);
       }
     }
     return this.level();
