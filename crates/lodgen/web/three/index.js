@@ -696,8 +696,10 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 
   // Once the topology of the level refine stops at (records .. k, the
-  // decoder's onTopology) is in and every record before its chunk is
-  // applied (whichever comes last: refine calls it after a level too): the geometry takes that level's triangles (its draw order)
+  // decoder's onTopology) is in, every record before its chunk applied and
+  // at least an eighth of the chunk's bytes still to come (else the
+  // level itself comes about as soon as a frame drawn now would, and
+  // behind it): the geometry takes that level's triangles (its draw order)
   // before their positions come, each new vertex where the vertex it
   // splits is drawn now, with its normal, so every new face is degenerate
   // and the picture is the current level's; then a "prepare" event. A
@@ -710,6 +712,7 @@ export class ProgressiveMesh extends EventDispatcher {
     if (!g || this.cw || !o || o.records !== k || a >= k || this.prepared === k) return;
     const c = h.chunks.findIndex((x) => x.records >= k);
     if (c <= 0 || h.chunks[c - 1].records !== a) return;
+    if (8 * (this.chunkEnds[c] - this.received) < this.chunkEnds[c] - this.chunkEnds[c - 1]) return;
     const t = performance.now(), base = h.baseVertices, v1 = d.v1, pos = this.vpos, nrm = g.attributes.normal.array;
     for (let i = a; i < k; i++) {
       const u = 3 * v1[i], w = 3 * (base + i);
@@ -799,9 +802,6 @@ export class ProgressiveMesh extends EventDispatcher {
         }
         this.baseShown = true;
         this.dispatchEvent({ type: "level", level: k > 0 ? this.levels.indexOf(k) : this.levels.length - 1, records: k, triangles: this.nt });
-        // the decoder ahead (a busy main thread): the last level's topology
-        // came before this level was applied
-        if (k > 0 && this.decoder.count < this.goal) this.prepare(this.goal);
       }
     }
     return this.level();
