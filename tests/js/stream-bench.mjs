@@ -4,7 +4,7 @@
 //
 //   node stream-bench.mjs --progressive P.glb --plain F.glb [--name NAME]
 //        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json] [--timeline]
-//        [--render task|each] [--hold-ms MS]
+//        [--render task|each] [--hold-ms MS] [--no-prepare-frame]
 //
 // The local server sends every response after `latency-ms`, at `mbit`
 // Mbit/s, responses one after another on the one simulated line. The page
@@ -13,7 +13,8 @@
 // loader (coarsest level drawn = first pixel; every level applied and drawn
 // = full detail; the page draws once per task, as a render loop would once
 // per frame, so levels applied in one go share a draw, and draws a frame, not
-// waited for, on the loader's "prepare" event; `--render each`: a
+// waited for, on the loader's "prepare" event (`--no-prepare-frame`: not);
+// `--render each`: a
 // draw on every level event; `--hold-ms`: the loader's holdMs, default its
 // own). A draw is timed until one pixel is read
 // back (the frame done), without the checks' screenshot. Prints each run,
@@ -54,6 +55,7 @@ function parseArgs(argv) {
     else if (a === '--timeline') o.timeline = true;
     else if (a === '--render') o.render = v();
     else if (a === '--hold-ms') o.holdMs = Number(v());
+    else if (a === '--no-prepare-frame') o.prepareFrame = false;
     else { console.error(`stream-bench.mjs: unknown argument ${a}`); process.exit(2); }
   }
   if (!o.progressive || !o.plain) { console.error('stream-bench.mjs: needs --progressive P.glb --plain F.glb'); process.exit(2); }
@@ -151,7 +153,8 @@ async function main() {
       const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
       const plainFrame = await frameCost(page);
       requests.length = 0;
-      const prog = await page.evaluate(([u, render, holdMs]) => window.runProgressive(u, { hash: false, render, pixels: false, holdMs }), [`${base}/progressive.glb`, o.render, o.holdMs]);
+      const prog = await page.evaluate(([u, render, holdMs, prepareFrame]) => window.runProgressive(u, { hash: false, render, pixels: false, holdMs, prepareFrame }),
+        [`${base}/progressive.glb`, o.render, o.holdMs, o.prepareFrame !== false]);
       const progFrame = await frameCost(page);
       const mine = requests.filter((q) => q.path === '/progressive.glb');
       const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);

@@ -158,7 +158,9 @@ function clear() {
 // `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
 // passed: the stream beyond its base is fetched when `refine` asks);
 // `holdMs` too (undefined: the loader's default). `then`: a level refined
-// to once `stopAt` is shown.
+// to once `stopAt` is shown. `prepareFrame: false`: no frame on the
+// loader's "prepare" event in the 'task' mode (the level's upload then
+// goes with its own draw).
 // `render`: 'each' draws on every level event (what the checks compare);
 // 'task' draws once per task as a render loop would per frame (the bench):
 // levels the loader applies in one go, their bytes being in already, share
@@ -170,7 +172,7 @@ function clear() {
 // the events, `draws` (each draw's start and
 // ms), the loader's timeline and main-thread `spent` ms, and the bytes a
 // full load needs (`fullBytes`: up to the stream's end).
-window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
+window.runProgressive = async (url, { stopAt = 0, then, prepareFrame = true, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
@@ -206,7 +208,7 @@ window.runProgressive = async (url, { stopAt = 0, then, keep = false, hash = tru
     if (render === 'each') {
       const d = draw(pixels);
       Object.assign(ev, { drawn: d.triangles, image: d.image });
-    } else setTimeout(() => { const at = t0() - start, d = draw('none'); draws.push({ t: at, ms: d.ms, uploaded: d.uploaded }); }, 0);
+    } else if (prepareFrame) setTimeout(() => { const at = t0() - start, d = draw('none'); draws.push({ t: at, ms: d.ms, uploaded: d.uploaded }); }, 0);
   });
   p.addEventListener('level', (e) => {
     // (the hash below is the check's, not the loader's)
