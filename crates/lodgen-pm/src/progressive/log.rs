@@ -38,6 +38,22 @@ impl Removed {
     pub fn len(&self) -> usize {
         self.n as usize
     }
+
+    /// No triangle.
+    pub const NONE: Removed = Removed {
+        t: [u32::MAX; 2],
+        n: 0,
+    };
+
+    /// `ts` held inline: `None` for three or more (see [`Log::removed_of`]).
+    pub fn inline(ts: &[u32]) -> Option<Removed> {
+        let mut t = [u32::MAX; 2];
+        t.get_mut(..ts.len())?.copy_from_slice(ts);
+        Some(Removed {
+            t,
+            n: ts.len() as u32,
+        })
+    }
 }
 
 /// The simplifiers' contraction log: the records, and one arena for all
@@ -110,6 +126,32 @@ impl Log {
             moved: self.mark()..self.mark(),
             error,
         }
+    }
+
+    /// Appends the corner arenas of `logs` one after the other, each
+    /// corner's triangle mapped by `map(i, triangle)` (`i` the log's place
+    /// in `logs`), on every core; returns where each log's corners start
+    /// now (to add to its records' `moved`).
+    pub fn append_corners(
+        &mut self,
+        logs: &[&Log],
+        map: impl Fn(usize, u32) -> u32 + Sync,
+    ) -> Vec<u32> {
+        use rayon::prelude::*;
+        let mut starts = Vec::with_capacity(logs.len());
+        let mut end = self.corners.len();
+        for l in logs {
+            starts.push(end as u32);
+            end += l.corners.len();
+        }
+        let first = self.corners.len() as u32;
+        self.corners
+            .par_extend((first..end as u32).into_par_iter().map(|j| {
+                let i = starts.partition_point(|&s| s <= j) - 1;
+                let k = logs[i].corners[(j - starts[i]) as usize];
+                map(i, k >> 2) << 2 | (k & 3)
+            }));
+        starts
     }
 
     /// Room for `n` more corners.

@@ -36,7 +36,7 @@ mod wedgelog;
 pub use split::{Corner, CornerIter, Corners, VertexSplit};
 pub use wedgelog::{SplitWedges, WedgeLog};
 
-pub(crate) use log::{Contraction, Log};
+pub(crate) use log::{Contraction, Log, Removed};
 
 use crate::mesh::Mesh;
 use crate::util::prefetch;
@@ -63,6 +63,10 @@ pub struct ProgressiveMesh {
 /// splits; each chunk is one parallel pass). Five in the unit tests, so
 /// that their small meshes take many chunks.
 const SPLIT_CHUNK: usize = if cfg!(test) { 5 } else { 1 << 16 };
+
+/// Meshes after fewer splits are replayed on one core
+/// ([`ProgressiveMesh::mesh_at_splits`]).
+const PARALLEL_MIN_SPLITS: usize = 1 << 16;
 
 impl ProgressiveMesh {
     /// Build from the simplifier's final state and log (collapse order).
@@ -221,10 +225,83 @@ impl ProgressiveMesh {
 
     /// The mesh after `k` splits (clamped to `len()`): exactly the mesh the
     /// simplifier had `len() - k` contractions into its run.
+    ///
+    /// Built in parts on every core: each part owns a run of vertices and
+    /// of triangles and replays every split in order on those alone (the
+    /// splits are read once per part, the scattered writes split between
+    /// them), so the mesh is the cursor's whatever the number of parts.
     pub fn mesh_at_splits(&self, k: usize) -> Mesh {
-        let mut c = self.cursor();
-        c.refine(k);
-        c.into_mesh()
+        let parts = if k < PARALLEL_MIN_SPLITS {
+            1
+        } else {
+            rayon::current_num_threads()
+        };
+        self.mesh_at_splits_in(k, parts)
+    }
+
+    /// [`Self::mesh_at_splits`] in `parts` parts (at least one).
+    fn mesh_at_splits_in(&self, k: usize, parts: usize) -> Mesh {
+        let splits = &self.splits[..k.min(self.len())];
+        let nv = self.base.positions.len() + splits.len();
+        let nt = self.base.triangles.len() + splits.iter().map(|s| s.faces.len()).sum::<usize>();
+        let mut positions = vec![[0.0; 3]; nv];
+        let mut triangles = vec![[0; 3]; nt];
+        let (pv, pt) = (
+            nv.div_ceil(parts.max(1)).max(1),
+            nt.div_ceil(parts.max(1)).max(1),
+        );
+        let mut vs: Vec<(usize, &mut [[f32; 3]])> = positions.chunks_mut(pv).enumerate().collect();
+        let mut ts: Vec<(usize, &mut [[u32; 3]])> = triangles.chunks_mut(pt).enumerate().collect();
+        // (one part may own vertices and no triangle, or the other way)
+        vs.resize_with(vs.len().max(ts.len()), || (usize::MAX, &mut []));
+        ts.resize_with(vs.len(), || (usize::MAX, &mut []));
+        vs.into_par_iter().zip(ts).for_each(|((i, pos), (j, tri))| {
+            self.replay_part((i.wrapping_mul(pv), pos), (j.wrapping_mul(pt), tri), splits);
+        });
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// The base mesh refined by `splits`, on the vertices from `v0` (`pos`)
+    /// and the triangles from `t0` (`tri`) only: what the cursor leaves there.
+    fn replay_part(
+        &self,
+        (v0, pos): (usize, &mut [[f32; 3]]),
+        (t0, tri): (usize, &mut [[u32; 3]]),
+        splits: &[VertexSplit],
+    ) {
+        let vs = v0..v0.saturating_add(pos.len());
+        let ts = t0..t0.saturating_add(tri.len());
+        let nb = self.base.positions.len();
+        // (the base's part of each run)
+        let (bv, bt) = (vs.start.min(nb)..vs.end.min(nb), {
+            let tb = self.base.triangles.len();
+            ts.start.min(tb)..ts.end.min(tb)
+        });
+        pos[..bv.len()].copy_from_slice(&self.base.positions[bv]);
+        tri[..bt.len()].copy_from_slice(&self.base.triangles[bt]);
+        let mut next = self.base.triangles.len();
+        for (i, s) in splits.iter().enumerate() {
+            if vs.contains(&(s.v1 as usize)) {
+                pos[s.v1 as usize - v0] = s.p1;
+            }
+            if vs.contains(&(nb + i)) {
+                pos[nb + i - v0] = s.p0;
+            }
+            for f in &s.faces {
+                if ts.contains(&next) {
+                    tri[next - t0] = *f;
+                }
+                next += 1;
+            }
+            for c in &s.corners {
+                if ts.contains(&(c.triangle as usize)) {
+                    tri[c.triangle as usize - t0][c.slot as usize] = s.v0;
+                }
+            }
+        }
     }
 
     /// The finest mesh of the sequence with at most `triangles` triangles
@@ -621,6 +698,40 @@ mod tests {
         log.spell_out_wedges(&vw, [3, 4]);
         assert_eq!(log.wedges, [[10, 11], [10, 11], [13, 14], [13, 14]]);
         assert_eq!(implied_per_vertex(&[5, u32::MAX, 7], 4), [5, 0, 7, 0]);
+    }
+
+    /// The mesh after `k` splits replayed in parts (each part owning a run
+    /// of vertices and triangles) is the cursor's, for any number of parts,
+    /// including more parts than vertices. Fails when a part skips a write
+    /// into its run (a face, a corner edit, a position) or applies them out
+    /// of order (a corner moved twice keeps the later split's vertex).
+    #[test]
+    fn meshes_replayed_in_parts_are_the_cursors() {
+        let m = crate::shapes::icosphere(3);
+        let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        let opts = crate::SimplifyOptions::DEFAULT.with_target_ratio(0.01);
+        let pm = crate::simplify(&m.positions, &indices, &opts)
+            .expect("a clean sphere")
+            .pm;
+        let mut cursor = pm.cursor();
+        for k in [0, 1, 2, pm.len() / 3, pm.len() - 1, pm.len()] {
+            cursor.seek(k);
+            for parts in [1, 2, 3, 7, 5000] {
+                assert_eq!(
+                    &pm.mesh_at_splits_in(k, parts),
+                    cursor.mesh(),
+                    "{k} splits, {parts} parts"
+                );
+            }
+        }
+        // a corner moved by more than one split
+        let mut seen = std::collections::BTreeSet::new();
+        let twice = pm
+            .splits
+            .iter()
+            .flat_map(|s| s.corners.iter())
+            .any(|c| !seen.insert(c));
+        assert!(twice);
     }
 
     /// The splits are built five at a time here, the log's records and
