@@ -490,6 +490,7 @@ impl BuildArgs {
             keep_progressive: true,
             keep_input: true,
             polish: self.polish.then_some(lodgen_pm::PolishOptions::CLUSTERS),
+            level_ready: None,
         })
     }
 

@@ -10,7 +10,7 @@ use lodgen_pm::Meter;
 
 use crate::gltf_out;
 use crate::io;
-use crate::lod::{self, MeshBuild, Progress};
+use crate::lod::{self, LevelHook, MeshBuild, Progress};
 use crate::scene::{LodMesh, Scene, Warning};
 
 use super::args::BuildArgs;
@@ -80,18 +80,30 @@ pub fn build_file_metered(
         .with_context(|| format!("reading {}", input.display()))?;
     let read = t_read.elapsed();
     let mut warnings = scene.warnings.clone();
+    // each level's buffers prepared while the build measures the next
+    // (`lod::LevelHook`): the write then only assembles them
+    let ready = Arc::new(gltf_out::PreparedLevels::for_scene(&scene));
+    let store = Arc::clone(&ready);
+    opts.level_ready = Some(LevelHook(Arc::new(move |mesh, level, primitives| {
+        store.prepare(mesh, level, primitives)
+    })));
     let t_build = Instant::now();
     let (builds, lods) = build_isolated(&mut scene, &opts, args.strict, &mut warnings, on_progress)
         .with_context(|| format!("simplifying {}", input.display()))?;
     let build = t_build.elapsed();
+    drop(opts);
+    // (a mesh written unsimplified may have had levels prepared)
+    let built: std::collections::BTreeSet<usize> = builds.iter().map(|b| b.lod.source).collect();
+    ready.retain_meshes(|m| built.contains(&m));
     if args.progressive {
         progressive_warnings(input, &scene, &builds, args.strict, &mut warnings)?;
     }
     on_progress(Progress::Writing);
     let t_write = Instant::now();
     let wopts = args.write_options();
-    let summary = gltf_out::write_lods_with(output, &scene, &lods, &wopts, args.strict)
-        .with_context(|| format!("writing {}", output.display()))?;
+    let summary =
+        gltf_out::write_lods_prepared(output, &scene, &lods, &wopts, args.strict, Some(&ready))
+            .with_context(|| format!("writing {}", output.display()))?;
     warnings.extend(summary.warnings.iter().cloned());
     // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
     if args.progressive {

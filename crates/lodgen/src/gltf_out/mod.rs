@@ -81,7 +81,8 @@ use document::{flat_document, gltf_document, InputGltf};
 pub use error::{LevelProblem, WriteError};
 use files::{write_atomically, Format};
 pub use options::{Compression, MeshSummary, WriteOptions, WriteSummary};
-use prepare::prepare_chains;
+pub use prepare::PreparedLevels;
+use prepare::{material_count, prepare_chains};
 
 /// Writes `scene` with every mesh replaced by its LOD chain to `path`
 /// (`.glb` or `.gltf` by extension). `lods[i].levels[0]` is the finest level;
@@ -109,6 +110,20 @@ pub fn write_lods_with(
     opts: &WriteOptions,
     strict: bool,
 ) -> Result<WriteSummary, WriteError> {
+    write_lods_prepared(path, scene, lods, opts, strict, None)
+}
+
+/// [`write_lods_with`], taking the levels `ready` holds (prepared while the
+/// build went on, [`PreparedLevels`]) instead of preparing them again: the
+/// same bytes.
+pub fn write_lods_prepared(
+    path: &Path,
+    scene: &Scene,
+    lods: &[LodMesh],
+    opts: &WriteOptions,
+    strict: bool,
+    ready: Option<&PreparedLevels>,
+) -> Result<WriteSummary, WriteError> {
     let format = match path.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("glb") => Format::Glb,
         Some(e) if e.eq_ignore_ascii_case("gltf") => Format::Gltf,
@@ -118,11 +133,7 @@ pub fn write_lods_with(
             })
         }
     };
-    let material_count = match &scene.origin {
-        Origin::Flat => scene.materials.len(),
-        Origin::Gltf { document, .. } => document.materials.len(),
-    };
-    let mut chains = prepare_chains(scene, lods, material_count)?;
+    let mut chains = prepare_chains(scene, lods, material_count(scene), ready)?;
     let mut warnings = Vec::new();
     if let Origin::Gltf { json, .. } = &scene.origin {
         input::carry_mesh_properties(json, &mut chains, &mut warnings);

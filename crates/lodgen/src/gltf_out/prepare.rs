@@ -2,9 +2,12 @@
 //! [`LevelProblem`]s), computes missing normals, applies meshopt's vertex
 //! cache (`order`) and fetch order, and the chain's dequantization box.
 
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+
 use rayon::prelude::*;
 
-use crate::scene::{LodMesh, MorphTarget, Primitive, Scene};
+use crate::scene::{LodMesh, MorphTarget, Origin, Primitive, Scene};
 
 use super::error::{LevelProblem, WriteError};
 
@@ -39,10 +42,95 @@ pub(super) struct PreparedChain {
     pub(super) carried: serde_json::Map<String, serde_json::Value>,
 }
 
+/// Levels prepared before the write: each level's primitives validated and
+/// put in vertex cache and fetch order, normals computed, while the build
+/// measures other levels ([`crate::lod::LevelHook`], what the CLI gives
+/// [`crate::lod::BuildOptions::level_ready`]); [`super::write_lods_prepared`]
+/// then takes them instead of preparing the levels again. The same function
+/// of the same primitives: the same bytes.
+pub struct PreparedLevels {
+    /// The material count the levels were validated against.
+    material_count: usize,
+    /// Per (source mesh, level): each primitive prepared.
+    levels: Mutex<BTreeMap<(usize, usize), Vec<PreparedPrimitive>>>,
+}
+
+/// One primitive prepared, `None` without triangles, or why it cannot be.
+type PreparedPrimitive = Result<Option<Prepared>, LevelProblem>;
+
+impl PreparedLevels {
+    /// Nothing prepared yet, for the meshes of `scene` (validated against
+    /// its materials, as the writer does).
+    pub fn for_scene(scene: &Scene) -> Self {
+        PreparedLevels {
+            material_count: material_count(scene),
+            levels: Mutex::new(BTreeMap::new()),
+        }
+    }
+
+    /// Prepares level `level` of source mesh `mesh` (its primitives in
+    /// parallel) and keeps it for the write.
+    pub fn prepare(&self, mesh: usize, level: usize, primitives: &[Primitive]) {
+        let count = self.material_count;
+        let done: Vec<PreparedPrimitive> =
+            primitives.par_iter().map(|p| prepare(p, count)).collect();
+        self.lock().insert((mesh, level), done);
+    }
+
+    /// Drops what was prepared for the meshes `keep` refuses (those whose
+    /// build failed, written unsimplified instead).
+    pub fn retain_meshes(&self, keep: impl Fn(usize) -> bool) {
+        self.lock().retain(|&(mesh, _), _| keep(mesh));
+    }
+
+    /// Whether no level is kept.
+    pub fn is_empty(&self) -> bool {
+        self.lock().is_empty()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, BTreeMap<(usize, usize), Vec<PreparedPrimitive>>> {
+        // (a panic while another thread held the lock leaves whole entries)
+        self.levels.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// What was prepared for this level, if it was prepared from these
+    /// primitives (their number and index counts: a guard against a level
+    /// that changed after it was given) against `material_count`.
+    fn take(
+        &self,
+        (mesh, level): (usize, usize),
+        primitives: &[Primitive],
+        material_count: usize,
+    ) -> Option<Vec<PreparedPrimitive>> {
+        let done = self.lock().remove(&(mesh, level))?;
+        let same = |(d, p): (&PreparedPrimitive, &Primitive)| match d {
+            Ok(Some(q)) => q.indices.len() == p.indices.len(),
+            Ok(None) => p.indices.is_empty(),
+            Err(_) => true,
+        };
+        let matches = material_count == self.material_count
+            && done.len() == primitives.len()
+            && done.iter().zip(primitives).all(same);
+        matches.then_some(done)
+    }
+}
+
+/// The materials a level's primitives may name: the scene's, or the input
+/// glTF document's.
+pub(super) fn material_count(scene: &Scene) -> usize {
+    match &scene.origin {
+        Origin::Flat => scene.materials.len(),
+        Origin::Gltf { document, .. } => document.materials.len(),
+    }
+}
+
+/// Every chain's levels prepared (validated, ordered, normals), the levels
+/// found in `ready` taken from there.
 pub(super) fn prepare_chains(
     scene: &Scene,
     lods: &[LodMesh],
     material_count: usize,
+    ready: Option<&PreparedLevels>,
 ) -> Result<Vec<PreparedChain>, WriteError> {
     let mut seen = vec![false; scene.meshes.len()];
     let mut chains = Vec::with_capacity(lods.len());
@@ -73,15 +161,20 @@ pub(super) fn prepare_chains(
         // every level's primitives at once (vertex cache and fetch order,
         // normals); the checks below then go in order, so the first
         // problem is reported as before
-        let mut prepared: Vec<Vec<Result<Option<Prepared>, LevelProblem>>> = lod
+        let mut prepared: Vec<Vec<PreparedPrimitive>> = lod
             .levels
             .par_iter()
-            .map(|level| {
-                level
-                    .primitives
-                    .par_iter()
-                    .map(|p| prepare(p, material_count))
-                    .collect()
+            .enumerate()
+            .map(|(k, level)| {
+                let taken =
+                    ready.and_then(|r| r.take((lod.source, k), &level.primitives, material_count));
+                taken.unwrap_or_else(|| {
+                    level
+                        .primitives
+                        .par_iter()
+                        .map(|p| prepare(p, material_count))
+                        .collect()
+                })
             })
             .collect();
         let mut levels = Vec::with_capacity(lod.levels.len());

@@ -19,7 +19,7 @@ use super::extract::extract;
 use super::fit::FitSource;
 use super::flat::{flatten, Flat};
 use super::measure::Measurer;
-use super::options::{BuildOptions, LevelRequest, Progress};
+use super::options::{BuildOptions, LevelHook, LevelRequest, Progress};
 use super::reference::{inverse, measurer_in_input_order, Origins};
 use super::select::select_splits;
 use super::wedges::{prepare_wedged, simplify_wedged, simplify_wedged_beside};
@@ -347,13 +347,14 @@ fn build_mesh(
         None => (&full, measurer),
     };
     let mopts = &opts.measure;
+    let ready = opts.level_ready.as_ref().map(|h| (h, index));
     let measured = measure_levels(
         extracted,
         full,
         &splits,
         mopts,
         &measurer,
-        side_by_side,
+        (side_by_side, ready),
         &mut measuring,
     );
     let (lod_levels, errors) = or_restore!(measured, full);
@@ -697,20 +698,29 @@ fn measurable(full: &Mesh, extracted: &[Extracted]) -> bool {
 /// `side_by_side`, all levels at once, their meshes freed together), then
 /// the screen coverages from the measured errors. `full` stands for a level
 /// without a mesh (the original, or not measured: its error does not read
-/// it).
+/// it). With `ready` (the hook of [`BuildOptions::level_ready`] and the
+/// mesh's index), each level's primitives are given to the hook beside the
+/// measurement: side by side every level during theirs, else the previous
+/// level during the next one's (so one level's prepared buffers wait at a
+/// time, not beside the finest level's measurement, the peak).
 fn measure_levels(
     extracted: Vec<Extracted>,
     full: &Mesh,
     splits: &[usize],
     mopts: &MeasureOptions,
     measurer: &Measurer<'_>,
-    side_by_side: bool,
+    (side_by_side, ready): (bool, Option<(&LevelHook, usize)>),
     measuring: &mut dyn FnMut(usize, usize),
 ) -> Result<(Vec<LodLevel>, Vec<ErrorReport>), BuildError> {
     let diagonal = measurer.diagonal();
     let mut errors = Vec::with_capacity(splits.len());
-    let mut lod_levels = Vec::with_capacity(splits.len());
+    let mut lod_levels: Vec<LodLevel> = Vec::with_capacity(splits.len());
     let mut reports = Vec::new();
+    let hand = |level: usize, primitives: &[Primitive]| {
+        if let Some((LevelHook(f), mesh)) = ready {
+            f(mesh, level, primitives);
+        }
+    };
     if side_by_side {
         measuring(0, splits.len());
         let levels: Vec<(&Mesh, usize)> = extracted
@@ -718,7 +728,20 @@ fn measure_levels(
             .zip(splits)
             .map(|(l, &k)| (l.mesh.as_ref().unwrap_or(full), k))
             .collect();
-        reports = measurer.measure_levels(&levels, mopts)?;
+        reports = match ready {
+            None => measurer.measure_levels(&levels, mopts)?,
+            // (side by side no level is deferred: its primitives are final)
+            Some(_) => {
+                let every = || {
+                    for (li, l) in extracted.iter().enumerate() {
+                        if l.deferred.is_none() {
+                            hand(li, &l.primitives);
+                        }
+                    }
+                };
+                rayon::join(|| measurer.measure_levels(&levels, mopts), every).0?
+            }
+        };
     }
     let mut reports = reports.into_iter();
     for (li, (level, &k)) in extracted.into_iter().zip(splits).enumerate() {
@@ -726,7 +749,15 @@ fn measure_levels(
             Some(r) => r,
             None => {
                 measuring(li, splits.len());
-                measurer.measure(level.mesh.as_ref().unwrap_or(full), k, mopts)?
+                let mesh = level.mesh.as_ref().unwrap_or(full);
+                // (the previous level handed over meanwhile)
+                match (ready, li.checked_sub(1).and_then(|p| lod_levels.get(p))) {
+                    (Some(_), Some(previous)) => {
+                        let previous = || hand(li - 1, &previous.primitives);
+                        rayon::join(|| measurer.measure(mesh, k, mopts), previous).0?
+                    }
+                    _ => measurer.measure(mesh, k, mopts)?,
+                }
             }
         };
         let primitives = match level.deferred {

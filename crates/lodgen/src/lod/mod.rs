@@ -51,6 +51,9 @@ mod wedges;
 
 pub use build::{build_lods, build_lods_isolated, build_one, BuildTimes, MeshBuild, SceneBuild};
 pub use error::BuildError;
-pub use options::{AttributeWeights, BuildOptions, LevelRequest, Progress, DEFAULT_MIN_TRIANGLES};
+pub use options::{
+    AttributeWeights, BuildOptions, LevelFn, LevelHook, LevelRequest, Progress,
+    DEFAULT_MIN_TRIANGLES,
+};
 pub use stream::stream_attributes;
 pub use wedges::simplify_mesh;

@@ -5,6 +5,8 @@ use lodgen_pm::levels::LevelSpec;
 use lodgen_pm::metric::MeasureOptions;
 use lodgen_pm::{AdaptiveOptions, Method, SimplifyOptions};
 
+use crate::scene::Primitive;
+
 /// Which levels to build.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LevelRequest {
@@ -64,6 +66,31 @@ pub struct BuildOptions {
     /// measured errors are the polished ones; the progressive mesh and its
     /// stream keep the logged positions.
     pub polish: Option<lodgen_pm::PolishOptions>,
+    /// Given each level's primitives as they will be written, while another
+    /// level is measured (`None`: nobody; the default): see [`LevelHook`].
+    pub level_ready: Option<LevelHook>,
+}
+
+/// What [`BuildOptions::level_ready`] calls: `(mesh, level, primitives)`,
+/// the index of the source mesh, the level (0 finest) and its primitives
+/// exactly as the mesh's [`crate::scene::LodMesh`] will hold them, on a
+/// pool thread beside the measurement of another level (`rayon::join`), so
+/// that a writer prepares a level's buffers while the build goes on (the
+/// CLI's `gltf_out::PreparedLevels`). Not every level is given (the last
+/// one measured is not: nothing is left to overlap it with), and a mesh
+/// whose build then fails (written unsimplified, one level) may have had
+/// levels given: the caller keeps what it made for the meshes that were
+/// built only.
+#[derive(Clone)]
+pub struct LevelHook(pub LevelFn);
+
+/// The function a [`LevelHook`] holds.
+pub type LevelFn = std::sync::Arc<dyn Fn(usize, usize, &[Primitive]) + Send + Sync>;
+
+impl std::fmt::Debug for LevelHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("LevelHook")
+    }
 }
 
 /// Default of [`BuildOptions::min_triangles`]: 8. Cards, quads, decals and
@@ -128,6 +155,7 @@ impl Default for BuildOptions {
             keep_progressive: true,
             keep_input: true,
             polish: None,
+            level_ready: None,
         }
     }
 }
