@@ -346,13 +346,12 @@ fn build_mesh(
         }
         None => (&full, measurer),
     };
-    let mopts = &opts.measure;
     let ready = opts.level_ready.as_ref().map(|h| (h, index));
     let measured = measure_levels(
         extracted,
         full,
         &splits,
-        mopts,
+        &opts.measure,
         &measurer,
         (side_by_side, ready),
         &mut measuring,
