@@ -3,7 +3,12 @@
 //! 0. `cargo xtask layout`'s rules (file and function lengths, module
 //!    cycles), in-process.
 //! 1. `cargo test --workspace` with `LODGEN_TEST_OUT=<root>/target/test-out`
-//!    (emptied first); Rust tests write every glTF they produce there.
+//!    (emptied first); Rust tests write every glTF they produce there. The
+//!    property tests (proptest) run from a fixed seed, [`PROPTEST_SEED`],
+//!    unless `PROPTEST_RNG_SEED` is set: the same cases on every run, so a
+//!    CI result is reproducible (plain `cargo test` draws a new seed each
+//!    run; `PROPTEST_RNG_SEED=N PROPTEST_CASES=M cargo xtask test`
+//!    explores).
 //! 2. `cargo xtask fuzz --cases 3000 --seed 1` in-process (mutated input
 //!    files through read, build, write, inspect; see `fuzz.rs`).
 //! 3. Khronos glTF-Validator on everything in that directory
@@ -240,6 +245,10 @@ fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
     steps.run("pytest crates/lodgen/python/tests", &mut pytest);
 }
 
+/// The property tests' seed under `cargo xtask test` (when
+/// `PROPTEST_RNG_SEED` is unset).
+const PROPTEST_SEED: u64 = 23;
+
 pub fn run(cargo_test_args: &[String]) -> Result<()> {
     let root = workspace_root();
     let out = root.join("target").join("test-out");
@@ -278,14 +287,16 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
 
     // 1. Rust tests.
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));
-    steps.run(
-        "cargo test",
-        Command::new(cargo)
-            .args(["test", "--workspace"])
-            .args(cargo_test_args)
-            .env(TEST_OUT_ENV, &out)
-            .current_dir(&root),
-    );
+    let mut cargo_test = Command::new(cargo);
+    cargo_test
+        .args(["test", "--workspace"])
+        .args(cargo_test_args)
+        .env(TEST_OUT_ENV, &out)
+        .current_dir(&root);
+    if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
+        cargo_test.env("PROPTEST_RNG_SEED", PROPTEST_SEED.to_string());
+    }
+    steps.run("cargo test", &mut cargo_test);
 
     // 2. A fixed-seed fuzz budget (about half a minute; `cargo xtask fuzz
     // --cases N --seed S` for a long run).

@@ -299,7 +299,7 @@ impl Engine {
         if shared.len() != 2 || common != 2 || opposite[0] == opposite[1] {
             return Err(Rejected::Link);
         }
-        moved_faces_ok(faces, v0, v1, p, &opposite)?;
+        moved_faces_ok(faces, v0, v1, p, &opposite, |_| None)?;
         Ok(shared)
     }
 

@@ -51,6 +51,13 @@ impl Simplifier {
             self.tri_alive[t as usize] = false;
         }
         self.live_tris -= removed.len();
+        // (`v1`'s faces before `v0`'s in its new fan: `settle_lift`)
+        let own = if liftable {
+            let fan = self.vtris.fan(v1).iter();
+            fan.filter(|&&t| self.tri_alive[t as usize]).count()
+        } else {
+            0
+        };
         self.move_fan(v0, v1, &edits);
         self.pos[i1] = merged;
         let q0 = self.quadric[i0];
@@ -77,7 +84,7 @@ impl Simplifier {
             at.contract(v0, v1, &removed, e, &self.tris, w);
         }
         self.merge_partners(v0, v1);
-        self.settle_lift(v0, logged[0], v1, liftable);
+        self.settle_lift(v0, logged, v1, liftable, own);
         record.moved.end = self.log.mark();
         self.log.records.push(record);
         self.stats.collapses += 1;

@@ -309,6 +309,29 @@ pub(crate) fn on_border<F: FanLookup + ?Sized>(f: Faces<'_, F>, v: u32) -> bool 
     })
 }
 
+/// Whether a face with corners `b`, `c` and a corner moving from `from` to
+/// `to` keeps its orientation (turns by less than [`FLIP_MIN_COS`]) and
+/// its area ([`DEGENERATE_AREA_RATIO_SQ`]).
+#[inline]
+pub(crate) fn turn_ok(from: DVec3, to: DVec3, b: DVec3, c: DVec3) -> Result<(), Rejected> {
+    let bc = c - b;
+    let n_old = (b - from).cross(bc);
+    let n_new = (b - to).cross(bc);
+    let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
+    if l_old > 0.0 {
+        if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
+            return Err(Rejected::Degenerate);
+        }
+        // cos < FLIP_MIN_COS, without a square root: a negative dot
+        // product is a flip, else compare squares
+        let d = n_old.dot(n_new);
+        if d < 0.0 || d * d < FLIP_MIN_COS * FLIP_MIN_COS * (l_old * l_new) {
+            return Err(Rejected::Flip);
+        }
+    }
+    Ok(())
+}
+
 /// The geometric legality of contracting `v0` into `v1` at `p`, `shared`
 /// being the triangles on both (deleted) and `opposite` their third
 /// vertices, once the link condition holds: no moved face may flip (turn
@@ -316,16 +339,26 @@ pub(crate) fn on_border<F: FanLookup + ?Sized>(f: Faces<'_, F>, v: u32) -> bool 
 /// ([`DEGENERATE_AREA_RATIO_SQ`]), and no moved face may land on an
 /// existing one (a tetrahedron or small closed part flattening into a
 /// sheet).
+///
+/// `p` is taken as stored (rounded to `f32`), so that the test holds for
+/// the positions the mesh and its log keep. `logged` gives the position the
+/// log records for a vertex whose logged position differs from its working
+/// one (a lifted vertex, `lift.rs`), else `None`: a moved face with such a
+/// corner is tested in the logged positions too (the log's levels must
+/// hold the rule, not only the simplifier's working mesh).
 pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
     f: Faces<'_, F>,
     v0: u32,
     v1: u32,
     p: DVec3,
     opposite: &[u32],
+    logged: impl Fn(u32) -> Option<DVec3>,
 ) -> Result<(), Rejected> {
+    let p = dv(p.as_vec3().to_array());
     for (moving, other) in [(v0, v1), (v1, v0)] {
         let pm = dv(f.pos[moving as usize]);
-        if pm == p {
+        let lm = logged(moving);
+        if pm == p && lm.is_none() {
             continue; // (a half-edge survivor) its faces do not move
         }
         for &t in f.vtris.fan(moving) {
@@ -341,21 +374,13 @@ pub(crate) fn moved_faces_ok<F: FanLookup + ?Sized>(
             if b == other || c == other {
                 continue;
             }
+            let (lb, lc) = (logged(b), logged(c));
             let (b, c) = (dv(f.pos[b as usize]), dv(f.pos[c as usize]));
-            let bc = c - b;
-            let n_old = (b - pm).cross(bc);
-            let n_new = (b - p).cross(bc);
-            let (l_old, l_new) = (n_old.length_squared(), n_new.length_squared());
-            if l_old > 0.0 {
-                if l_new <= DEGENERATE_AREA_RATIO_SQ * l_old {
-                    return Err(Rejected::Degenerate);
-                }
-                // cos < FLIP_MIN_COS, without a square root: a negative
-                // dot product is a flip, else compare squares
-                let d = n_old.dot(n_new);
-                if d < 0.0 || d * d < FLIP_MIN_COS * FLIP_MIN_COS * (l_old * l_new) {
-                    return Err(Rejected::Flip);
-                }
+            if pm != p {
+                turn_ok(pm, p, b, c)?;
+            }
+            if lm.is_some() || lb.is_some() || lc.is_some() {
+                turn_ok(lm.unwrap_or(pm), p, lb.unwrap_or(b), lc.unwrap_or(c))?;
             }
         }
     }

@@ -127,7 +127,7 @@ impl Simplifier {
         if joined {
             refuse(Rejected::Link)?;
         }
-        if let Err(r) = moved_faces_ok(faces, v0, v1, p, &l.opposite) {
+        if let Err(r) = moved_faces_ok(faces, v0, v1, p, &l.opposite, |v| self.lifted_at(v)) {
             refuse(r)?;
         }
         // a join lets any face land on another, not only the opposite
