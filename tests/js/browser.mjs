@@ -72,7 +72,8 @@ export async function launch(pageErrors, { viewport = { width: 640, height: 480 
  * the bytes come in), responses sharing the link one after another (as on
  * one slow line); a response the client closes early stops there and frees
  * the line. A route's own `throttle` applies to it instead (routes without
- * one are then sent at once when `throttle` is null). Each request is
+ * one are then sent at once when `throttle` is null). A route with `cache:
+ * true` may be kept in the browser's HTTP cache (else no-store). Each request is
  * logged into `requests`, with `sent`: the body bytes written before the end
  * or the client's close.
  */
@@ -130,7 +131,7 @@ export function startServer(routes, requests = [], throttle = null) {
       return;
     }
     const body = route.body;
-    const headers = { 'Content-Type': route.type, 'Cache-Control': 'no-store', 'Accept-Ranges': 'bytes' };
+    const headers = { 'Content-Type': route.type, 'Cache-Control': route.cache ? 'max-age=3600' : 'no-store', 'Accept-Ranges': 'bytes' };
     const m = /^bytes=(\d*)-(\d*)$/.exec(req.headers.range ?? '');
     if (m && (m[1] !== '' || m[2] !== '')) {
       let start;

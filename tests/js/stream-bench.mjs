@@ -5,6 +5,7 @@
 //   node stream-bench.mjs --progressive P.glb --plain F.glb [--name NAME]
 //        [--mbit 10] [--latency-ms 50] [--runs 3] [--json OUT.json] [--timeline]
 //        [--render task|each] [--hold-ms MS] [--no-prepare-frame]
+//        [--decode worker|main|both] [--cold]
 //
 // The local server sends every response after `latency-ms`, at `mbit`
 // Mbit/s, responses one after another on the one simulated line. The page
@@ -14,7 +15,15 @@
 // = full detail; the page draws once per task, as a render loop would once
 // per frame, so levels applied in one go share a draw, and draws a frame, not
 // waited for, on the loader's "prepare" event (`--no-prepare-frame`: not);
-// `--render each`: a
+// `--decode`: where the loader decodes the stream, in its Web Worker
+// (default, the loader's default) or on the page's main thread (its
+// `worker: false`); `both`: each run loads the progressive file both ways
+// after its plain load, in turn (worker first in odd runs, main in even
+// ones), and the table has a line for each: two loaders compared under the
+// same load. `--cold`: the page loaded anew before each progressive load
+// (a page's one load: the decoder's JIT cold, in the worker or not; else
+// the main thread's decoder and the loader's idle worker are warm from the
+// runs before). `--render each`: a
 // draw on every level event; `--hold-ms`: the loader's holdMs, default its
 // own). A draw is timed until one pixel is read
 // back (the frame done), without the checks' screenshot. Prints each run,
@@ -56,9 +65,13 @@ function parseArgs(argv) {
     else if (a === '--render') o.render = v();
     else if (a === '--hold-ms') o.holdMs = Number(v());
     else if (a === '--no-prepare-frame') o.prepareFrame = false;
+    else if (a === '--decode') o.decode = v();
+    else if (a === '--cold') o.cold = true;
     else { console.error(`stream-bench.mjs: unknown argument ${a}`); process.exit(2); }
   }
   if (!o.progressive || !o.plain) { console.error('stream-bench.mjs: needs --progressive P.glb --plain F.glb'); process.exit(2); }
+  o.modes = { worker: ['worker'], main: ['main'], both: ['worker', 'main'] }[o.decode || 'worker'];
+  if (!o.modes) { console.error(`stream-bench.mjs: --decode ${o.decode}: worker, main or both`); process.exit(2); }
   return o;
 }
 
@@ -90,7 +103,7 @@ function breakdown(prog, floorFull) {
     // bytes the final draw handed to WebGL buffers (MB)
     finalUpload: lastDraw.uploaded / 1e6,
     parse: at('coarse parsed') - at('coarse bytes'), decode: prog.spent.decode, apply: prog.spent.apply,
-    normals: prog.spent.normals, order: prog.spent.order, draws: prog.draws.length, drawMs: prog.draws.reduce((a, d) => a + d.ms, 0), marks: k,
+    normals: prog.spent.normals, order: prog.spent.order, worker: prog.spent.worker || 0, draws: prog.draws.length, drawMs: prog.draws.reduce((a, d) => a + d.ms, 0), marks: k,
   };
 }
 
@@ -125,73 +138,45 @@ async function frameCost(page) {
   return { wall, cpu: (gpuCpuMs() - c0) / FRAMES };
 }
 
-async function main() {
-  const o = parseArgs(process.argv.slice(2));
-  const routes = {
-    '/': { type: 'text/html; charset=utf-8', body: Buffer.from(HTML) },
-    '/page.js': {
-      type: 'text/javascript; charset=utf-8',
-      body: await bundle('three-lod-page.js', ['../../crates/lodgen/web/three/index.js', '../../crates/lodgen/web/three/lgpm.js', '../../crates/lodgen/web/three/order.js']),
-    },
-    '/progressive.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.progressive) },
-    '/plain.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.plain) },
-  };
-  const requests = [];
-  const server = await startServer(routes, requests, { bitsPerSecond: o.mbit * 1e6, latencyMs: o.latency });
-  const errors = [];
-  const browser = await launch(errors);
-  const runs = { plain: [], first: [], full: [], ratio: [], firstRatio: [], parts: [], plainParts: [] };
+const LOADER = ['index.js', 'lgpm.js', 'order.js', 'remote.js', 'worker.js'].map((f) => `../../crates/lodgen/web/three/${f}`);
+
+// One progressive load (after the plain run `plain` and its frame cost):
+// logged, and added to `runs`.
+function progressiveRun(o, r, mode, runs, plain, plainFrame, prog, progFrame, requests) {
   const floorOf = (bytes) => o.latency + (bytes * 8) / (o.mbit * 1e3);
-  const plainFloor = floorOf(fs.statSync(o.plain).size);
-  try {
-    const page = browser.page;
-    // the page too comes over the slow line (once, before any timing)
-    const base = `http://127.0.0.1:${server.address().port}`;
-    await page.goto(`${base}/`, { waitUntil: 'load', timeout: 120_000 });
-    await page.waitForFunction(() => window.pageReady === true, undefined, { timeout: 120_000 });
-    for (let r = 0; r < o.runs; r++) {
-      const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
-      const plainFrame = await frameCost(page);
-      requests.length = 0;
-      const prog = await page.evaluate(([u, render, holdMs, prepareFrame]) => window.runProgressive(u, { hash: false, render, pixels: false, holdMs, prepareFrame }),
-        [`${base}/progressive.glb`, o.render, o.holdMs, o.prepareFrame !== false]);
-      const progFrame = await frameCost(page);
-      const mine = requests.filter((q) => q.path === '/progressive.glb');
-      const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
-      const full = prog.events[prog.events.length - 1].t;
-      runs.plain.push(plain.t);
-      runs.first.push(prog.firstPixel.t);
-      runs.full.push(full);
-      runs.ratio.push(full / plain.t);
-      runs.firstRatio.push(prog.firstPixel.t / plain.t);
-      const parts = breakdown(prog, floorOf(prog.fullBytes));
-      runs.parts.push(parts);
-      runs.plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs, upload: plain.uploaded / 1e6, frame: plainFrame.wall, frameCpu: plainFrame.cpu });
-      parts.frame = progFrame.wall;
-      parts.frameCpu = progFrame.cpu;
-      console.log(`run ${r + 1}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive first pixel ` +
-        `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${full.toFixed(0)} ms ` +
-        `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent); full/plain ${(full / plain.t).toFixed(2)}`);
-      if (o.timeline) {
-        console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
-          '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', ') +
-          '; draws: ' + prog.draws.map((d) => `at ${d.t.toFixed(0)} ${d.ms.toFixed(0)} ms`).join(', '));
-        console.log(`  plain: loaded ${(plain.loaded - plainFloor).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms, then a frame ${plainFrame.wall.toFixed(0)} ms, GPU CPU ${plainFrame.cpu.toFixed(0)} ms ` +
-          `(progressive at full detail ${progFrame.wall.toFixed(0)} ms, GPU CPU ${progFrame.cpu.toFixed(0)} ms); ` +
-          `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
-          `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)} uploading ${parts.finalUpload.toFixed(2)} MB; plain's draw ` +
-          `${(plain.uploaded / 1e6).toFixed(2)} MB); whole load: parse ${parts.parse.toFixed(0)}, ` +
-          `decode ${parts.decode.toFixed(0)}, apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, draw order ${parts.order.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
-      }
-      if (prog.events[prog.events.length - 1].drawn !== plain.drawn) errors.push(`full detail draws ${prog.events[prog.events.length - 1].drawn} triangles, plain ${plain.drawn}`);
-    }
-  } finally {
-    await browser.close();
-    server.close();
+  const mine = requests.filter((q) => q.path === '/progressive.glb');
+  const bytes = mine.length, sent = mine.reduce((n, q) => n + q.sent, 0);
+  const full = prog.events[prog.events.length - 1].t;
+  runs.first.push(prog.firstPixel.t);
+  runs.full.push(full);
+  runs.ratio.push(full / plain.t);
+  runs.firstRatio.push(prog.firstPixel.t / plain.t);
+  const parts = breakdown(prog, floorOf(prog.fullBytes));
+  runs.parts.push(parts);
+  parts.frame = progFrame.wall;
+  parts.frameCpu = progFrame.cpu;
+  const tag = o.modes.length > 1 ? ` [${mode}]` : '';
+  console.log(`run ${r + 1}${tag}: plain ${plain.t.toFixed(0)} ms (${plain.drawn} triangles); progressive (decoded in ${prog.decodedIn}) first pixel ` +
+    `${prog.firstPixel.t.toFixed(0)} ms (${prog.firstPixel.drawn} triangles), full ${full.toFixed(0)} ms ` +
+    `(${prog.events[prog.events.length - 1].drawn} triangles; ${bytes} request(s), ${sent} bytes sent); full/plain ${(full / plain.t).toFixed(2)}`);
+  if (o.timeline) {
+    console.log('  timeline: ' + prog.timeline.map((m) => `${m.what} ${m.t.toFixed(0)} ms (${m.bytes} B)`).join(', ') +
+      '; drawn: ' + prog.events.map((e) => `${e.records} records ${e.t.toFixed(0)} ms`).join(', ') +
+      '; draws: ' + prog.draws.map((d) => `at ${d.t.toFixed(0)} ${d.ms.toFixed(0)} ms`).join(', '));
+    console.log(`  plain: loaded ${(plain.loaded - floorOf(fs.statSync(o.plain).size)).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms, then a frame ${plainFrame.wall.toFixed(0)} ms, GPU CPU ${plainFrame.cpu.toFixed(0)} ms ` +
+      `(progressive at full detail ${progFrame.wall.toFixed(0)} ms, GPU CPU ${progFrame.cpu.toFixed(0)} ms); ` +
+      `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
+      `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)} uploading ${parts.finalUpload.toFixed(2)} MB; plain's draw ` +
+      `${(plain.uploaded / 1e6).toFixed(2)} MB); whole load: parse ${parts.parse.toFixed(0)}, ` +
+      `decode ${parts.decode.toFixed(0)} (worker ${parts.worker.toFixed(0)}), apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, draw order ${parts.order.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
   }
+}
+
+// The medians of one decoder's runs (the JSON's fields; see main).
+function summary(o, runs, tag) {
   const med = (f, from = runs.parts) => stats(from.map(f)).median;
   const res = {
-    name: o.name, mbit: o.mbit, latencyMs: o.latency, runs: o.runs,
+    name: o.name, decode: tag, mbit: o.mbit, latencyMs: o.latency, runs: o.runs,
     plainBytes: fs.statSync(o.plain).size, progressiveBytes: fs.statSync(o.progressive).size,
     plain: stats(runs.plain), firstPixel: stats(runs.first), fullDetail: stats(runs.full),
     fullRatio: stats(runs.ratio), firstRatio: stats(runs.firstRatio),
@@ -202,18 +187,72 @@ async function main() {
   res.plainMs = res.plain.median;
   res.firstPixelMs = res.firstPixel.median;
   res.fullDetailMs = res.fullDetail.median;
-  console.log(`${o.name}, ${o.runs} runs, median (min – max): plain ${spread(res.plain)} ms, first pixel ${spread(res.firstPixel)} ms, ` +
+  const name = o.modes.length > 1 ? `${o.name} [decoded in ${tag}]` : o.name;
+  console.log(`${name}, ${o.runs} runs, median (min – max): plain ${spread(res.plain)} ms, first pixel ${spread(res.firstPixel)} ms, ` +
     `full ${spread(res.fullDetail)} ms; run by run full/plain ${spread(res.fullRatio, 2)}, first/plain ${spread(res.firstRatio, 2)}`);
   if (o.timeline) {
     const q = res.parts;
-    console.log(`${o.name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
+    console.log(`${name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
       `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}, ` +
       `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)} uploading ${q.finalUpload.toFixed(2)} MB, ` +
       `plain's ${res.plainParts.upload.toFixed(2)} MB); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
-      `decode ${q.decode.toFixed(0)}, apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, draw order ${q.order.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms; ` +
+      `decode ${q.decode.toFixed(0)} (the worker's own ${q.worker.toFixed(0)}), apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, draw order ${q.order.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms; ` +
       `a frame once loaded: plain ${res.plainParts.frame.toFixed(0)} ms (GPU process CPU ${res.plainParts.frameCpu.toFixed(0)} ms), ` +
       `progressive ${q.frame.toFixed(0)} ms (GPU process CPU ${q.frameCpu.toFixed(0)} ms)`);
   }
+  return res;
+}
+
+async function main() {
+  const o = parseArgs(process.argv.slice(2));
+  const routes = {
+    '/': { type: 'text/html; charset=utf-8', body: Buffer.from(HTML) },
+    '/page.js': { type: 'text/javascript; charset=utf-8', body: await bundle('three-lod-page.js', LOADER) },
+    // the loader's decoder worker, where the page's bundle looks for it
+    '/worker.js': { type: 'text/javascript; charset=utf-8', body: await bundle('../../crates/lodgen/web/three/worker.js', LOADER), cache: true },
+    '/progressive.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.progressive) },
+    '/plain.glb': { type: 'model/gltf-binary', body: fs.readFileSync(o.plain) },
+  };
+  const requests = [];
+  const server = await startServer(routes, requests, { bitsPerSecond: o.mbit * 1e6, latencyMs: o.latency });
+  const errors = [];
+  const browser = await launch(errors);
+  const newRuns = () => ({ plain: [], first: [], full: [], ratio: [], firstRatio: [], parts: [], plainParts: [] });
+  const runs = Object.fromEntries(o.modes.map((m) => [m, newRuns()]));
+  const plainFloor = o.latency + (fs.statSync(o.plain).size * 8) / (o.mbit * 1e3);
+  try {
+    const page = browser.page;
+    // the page too comes over the slow line (once, before any timing)
+    const base = `http://127.0.0.1:${server.address().port}`;
+    await page.goto(`${base}/`, { waitUntil: 'load', timeout: 120_000 });
+    await page.waitForFunction(() => window.pageReady === true, undefined, { timeout: 120_000 });
+    for (let r = 0; r < o.runs; r++) {
+      const plain = await page.evaluate((u) => window.runPlain(u, { pixels: false }), `${base}/plain.glb`);
+      const plainFrame = await frameCost(page);
+      const order = r % 2 ? [...o.modes].reverse() : o.modes;
+      for (const mode of order) {
+        if (o.cold) {
+          await page.goto(`${base}/`, { waitUntil: 'load', timeout: 120_000 });
+          await page.waitForFunction(() => window.pageReady === true, undefined, { timeout: 120_000 });
+        }
+        requests.length = 0;
+        const prog = await page.evaluate(([u, render, holdMs, prepareFrame, worker]) => window.runProgressive(u, { hash: false, render, pixels: false, holdMs, prepareFrame, worker }),
+          [`${base}/progressive.glb`, o.render, o.holdMs, o.prepareFrame !== false, mode === 'main' ? false : undefined]);
+        const progFrame = await frameCost(page);
+        if (prog.decodedIn !== mode) errors.push(`run ${r + 1}: decoded in ${prog.decodedIn}, not ${mode}${prog.workerError ? ` (${prog.workerError})` : ''}`);
+        runs[mode].plain.push(plain.t);
+        runs[mode].plainParts.push({ lag: plain.loaded - plainFloor, draw: plain.drawMs, upload: plain.uploaded / 1e6, frame: plainFrame.wall, frameCpu: plainFrame.cpu });
+        progressiveRun(o, r, mode, runs[mode], plain, plainFrame, prog, progFrame, requests);
+        if (prog.events[prog.events.length - 1].drawn !== plain.drawn) errors.push(`full detail draws ${prog.events[prog.events.length - 1].drawn} triangles, plain ${plain.drawn}`);
+      }
+    }
+  } finally {
+    await browser.close();
+    server.close();
+  }
+  const results = o.modes.map((m) => summary(o, runs[m], m));
+  // the first decoder's figures, and each one's under `decoders`
+  const res = { ...results[0], decoders: Object.fromEntries(o.modes.map((m, i) => [m, results[i]])) };
   if (o.json) fs.writeFileSync(o.json, JSON.stringify(res, null, 2));
   const real = errors.filter((e) => !/\(net::ERR_ABORTED\)$/.test(e));
   if (real.length) throw new Error(real.join('; '));

@@ -157,7 +157,8 @@ function clear() {
 // Progressive: level events with drawn triangles, hash, pixels; timings.
 // `prefetch`: passed to loadProgressive (default `stopAt`; 'none' = not
 // passed: the stream beyond its base is fetched when `refine` asks);
-// `holdMs` too (undefined: the loader's default). `then`: a level refined
+// `holdMs` and `worker` too (undefined: the loader's defaults; worker
+// false: decoded on the main thread). `then`: a level refined
 // to once `stopAt` is shown. `prepareFrame: false`: no frame on the
 // loader's "prepare" event in the 'task' mode (the level's upload then
 // goes with its own draw).
@@ -172,11 +173,11 @@ function clear() {
 // the events, `draws` (each draw's start and
 // ms), the loader's timeline and main-thread `spent` ms, and the bytes a
 // full load needs (`fullBytes`: up to the stream's end).
-window.runProgressive = async (url, { stopAt = 0, then, prepareFrame = true, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs } = {}) => {
+window.runProgressive = async (url, { stopAt = 0, then, prepareFrame = true, keep = false, hash = true, prefetch = stopAt, render = 'each', pixels = true, holdMs, worker } = {}) => {
   clear();
   const start = t0();
   const loader = new GLTFLoader().setMeshoptDecoder(MeshoptDecoder);
-  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: prefetch === 'none' ? undefined : prefetch, holdMs });
+  const p = await loadProgressive(url, { loader, meshoptDecoder: MeshoptDecoder, fetchOptions: { cache: 'no-store' }, prefetch: prefetch === 'none' ? undefined : prefetch, holdMs, worker });
   scene.add(p.gltf.scene);
   frame(p.gltf.scene);
   // first pixel: the coarse level as GLTFLoader parsed it
@@ -241,7 +242,7 @@ window.runProgressive = async (url, { stopAt = 0, then, prepareFrame = true, kee
   }
   if (keep) window.progressive = p;
   return { firstPixel, events, prepared, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
-    draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength };
+    draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength, decodedIn: p.inWorker ? 'worker' : 'main', workerError: p.workerError || null };
 };
 
 // A file whose TEXCOORD_0 is normalized u16 with KHR_texture_transform:
@@ -338,4 +339,7 @@ window.runMsftLod = async (url) => {
   return { levels, switches, coverages, drawn: d.triangles, variance: d.variance };
 };
 
-window.pageReady = true;
+// the loader's decoder worker script in the HTTP cache (the bench serves
+// it cacheable), as an app's assets come with its page: a load then
+// starts the worker without fetching it over the line
+fetch(new URL('./worker.js', import.meta.url)).then((r) => r.arrayBuffer()).catch(() => {}).finally(() => { window.pageReady = true; });

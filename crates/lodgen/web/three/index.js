@@ -21,6 +21,10 @@
 // request, and applies each level (decoded as its bytes arrive) with update
 // ranges, dispatching a "level" event per level (a level waits up to
 // `holdMs` for the next ones the line brings by then: one frame for them).
+// The stream is decoded in a module worker (worker.js, remote.js: the
+// page forwards its bytes, the worker posts records, positions and the
+// draw order as transferable arrays), or on the main thread (`worker:
+// false`, or no Web Workers).
 // `refineForScreen(camera, renderer)` refines to the level the file's
 // MSFT_screencoverage asks for at the object's current size on screen.
 //
@@ -36,6 +40,7 @@ import {
 } from "three";
 import { StreamDecoder, parseHeader } from "./lgpm.js";
 import { splitTreeOrder } from "./order.js";
+import { RemoteDecoder } from "./remote.js";
 
 const EXTENSION = "LODGEN_progressive";
 
@@ -215,24 +220,17 @@ class LodgenProgressivePlugin {
 
 // A loaded progressive GLB: the scene (coarsest level) and the stream.
 export class ProgressiveMesh extends EventDispatcher {
-  constructor({ url, fetchOptions, meshoptDecoder, json, binStart, found }) {
+  constructor({ url, fetchOptions, meshoptDecoder, json, binStart, found, worker }) {
     super();
     this.url = url;
     this.fetchOptions = fetchOptions;
     this.found = found;
     this.json = json;
     this.binStart = binStart;
-    this.decoder = new StreamDecoder(meshoptDecoder);
-    // records' positions as grid points only (writeVertices)
-    this.decoder.floats = false;
-    // the level refine stops at is drawn in the split tree's order
-    // (order.js), worked out once its chunk's topology is in, while its
-    // positions still download (drawOrderFor)
-    this.decoder.onTopology = (k) => {
-      this.drawOrderFor(k, this.decoder.tri);
-      this.prepare(k);
-    };
+    this.meshoptDecoder = meshoptDecoder;
     this.goal = 0; // the records refine stops at (the furthest asked for)
+    this.spentPushing = 0; // main-thread ms in decoder.push
+    this.useDecoder(worker ? new RemoteDecoder(worker.worker, worker) : new StreamDecoder(meshoptDecoder));
     this.drawOrder = null; // {records, index}: the triangles in draw order
     const bv = json.bufferViews[found.ext.bufferView];
     this.streamStart = binStart + (bv.byteOffset || 0);
@@ -252,7 +250,56 @@ export class ProgressiveMesh extends EventDispatcher {
     // main-thread ms spent so far: decoding the stream, applying records
     // (index edits, positions, corner copies), computing normals
     // (and ordering the last level's triangles: order)
-    this.spent = { decode: 0, apply: 0, normals: 0, order: 0 };
+    // (with the decoder in a worker: decode = handing it the bytes and
+    // taking its records in; worker = its own decoding, incl. the draw order)
+    this.spent = { decode: 0, apply: 0, normals: 0, order: 0, worker: 0 };
+  }
+
+  // The decoder: a StreamDecoder on the main thread, or a RemoteDecoder
+  // (remote.js) whose StreamDecoder runs in a worker; the loader reads the
+  // same fields of either. A worker that fails to start hands its bytes
+  // back to a StreamDecoder here.
+  useDecoder(d) {
+    this.decoder = d;
+    this.inWorker = d instanceof RemoteDecoder;
+    // records' positions as grid points only (writeVertices)
+    d.floats = false;
+    // the level refine stops at is drawn in the split tree's order
+    // (order.js), worked out once its chunk's topology is in, while its
+    // positions still download (drawOrderFor; in the worker, which posts it)
+    d.onTopology = (k, order) => {
+      this.drawOrderFor(k, order ? null : d.tri, order);
+      this.prepare(k);
+    };
+    if (!this.inWorker) return;
+    d.onProgress = () => {
+      this.fetched = d.chunksDone;
+      this.spent.worker = d.workerMs;
+      this.spent.decode = this.spentPushing + d.spent;
+      this.wake();
+    };
+    d.onError = (e) => {
+      this.error = this.error || e;
+      this.wake();
+    };
+    d.onFail = (bytes, e) => {
+      this.workerError = e.message;
+      this.useDecoder(new StreamDecoder(this.meshoptDecoder));
+      try {
+        for (const b of bytes) this.decoder.push(b);
+      } catch (err) {
+        this.error = this.error || err;
+      }
+      this.fetched = this.decoder.chunksDone;
+      this.wake();
+    };
+    if (this.goal) d.setGoal(this.goal);
+  }
+
+  // Stops the decoder's worker, if any (it stops by itself once the whole
+  // stream is decoded): refine can then go no further than decoded.
+  dispose() {
+    if (this.inWorker) this.decoder.terminate();
   }
 
   // Once chunk 0 (header + base mesh) is decoded: set up the geometry
@@ -623,14 +670,16 @@ export class ProgressiveMesh extends EventDispatcher {
     while (at < end()) {
       const v = await file.next();
       if (!v) throw new Error(`${this.url}: the file ends in the stream`);
-      const from = Math.max(0, this.streamStart - at), e = end(), to = Math.min(v.length, e - at);
+      const n = v.length, from = Math.max(0, this.streamStart - at), e = end(), to = Math.min(n, e - at);
       // let the rest go before decoding the last piece
-      if (at + v.length >= e) file.cancel();
+      if (at + n >= e) file.cancel();
+      // (a worker's decoder takes the bytes' buffer: v is then empty)
       if (to > from) this.take(v.subarray(from, to));
-      at += v.length;
+      at += n;
     }
     file.cancel();
-    this.requested = this.decoder.chunksDone;
+    // the chunks whose bytes are in (a worker may still decode them)
+    this.requested = h.chunkEnds.filter((x) => x <= this.received).length;
     this.lineOpen = false;
     if (this.wanted >= this.requested) this.request(this.wanted);
   }
@@ -645,7 +694,9 @@ export class ProgressiveMesh extends EventDispatcher {
     // (onTopology's draw order and prepare count as theirs)
     const t = performance.now(), o0 = this.spent.order + this.spent.apply;
     this.decoder.push(bytes);
-    this.spent.decode += performance.now() - t - (this.spent.order + this.spent.apply - o0);
+    const ms = performance.now() - t - (this.spent.order + this.spent.apply - o0);
+    this.spentPushing += ms;
+    this.spent.decode += ms;
     this.fetched = this.decoder.chunksDone;
     this.wake();
   }
@@ -682,9 +733,17 @@ export class ProgressiveMesh extends EventDispatcher {
   // else the loader's own once the level is applied (finishUpdate draws
   // the level in that order). Not for streams with wedges (their drawn
   // index is per (vertex, wedge) pair).
-  drawOrderFor(k, tri) {
+  drawOrderFor(k, tri, given = null) {
     const d = this.decoder, h = d.header;
     if (k !== this.goal || k === 0 || h.wedges || (this.drawOrder && this.drawOrder.records === k)) return;
+    // (the worker's, or none: the goal reached it late; finishUpdate's then)
+    if (given || !tri) {
+      if (given) {
+        this.drawOrder = { records: k, index: given };
+        this.mark(`draw order ${k}`);
+      }
+      return;
+    }
     const t = performance.now();
     // (a new array while the one there is drawn: it is the GPU's until replaced)
     const old = this.drawOrder && this.drawOrder.index, g = this.geometry;
@@ -781,6 +840,7 @@ export class ProgressiveMesh extends EventDispatcher {
     await this.start();
     const want = this.levels[Math.max(0, Math.min(level, this.levels.length - 1))];
     this.goal = Math.max(this.goal, want);
+    if (this.inWorker) this.decoder.setGoal(this.goal);
     const h = this.decoder.header;
     const chunkOf = (k) => h.chunks.findIndex((c) => c.records >= k);
     this.request(chunkOf(want));
@@ -844,6 +904,30 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 }
 
+// Decoder workers done with a load, by script URL (at most 2): the next
+// load takes one, ready and its JIT warm.
+const idleWorkers = [];
+
+// The decoder's worker for loadProgressive's `worker` option, or null:
+// {worker, reused, release} (RemoteDecoder's arguments).
+function startWorker(option) {
+  if (option === false || typeof Worker !== "function") return null;
+  // yours: reset for each load, never terminated but on its errors
+  if (option && typeof option.postMessage === "function") return { worker: option, reused: true, release: () => {} };
+  try {
+    const url = String(option === undefined || option === true ? new URL("./worker.js", import.meta.url) : option);
+    const release = (w) => {
+      idleWorkers.push({ url, worker: w });
+      while (idleWorkers.length > 2) idleWorkers.shift().worker.terminate();
+    };
+    const i = idleWorkers.findIndex((w) => w.url === url);
+    if (i >= 0) return { worker: idleWorkers.splice(i, 1)[0].worker, reused: true, release };
+    return { worker: new Worker(url, { type: "module" }), reused: false, release };
+  } catch {
+    return null;
+  }
+}
+
 // Load a lodgen GLB progressively (see the top of this file). Options:
 // `loader` (a GLTFLoader, with its MeshoptDecoder set when the file uses
 // EXT_meshopt_compression), `meshoptDecoder` (awaited `.ready`),
@@ -852,13 +936,20 @@ export class ProgressiveMesh extends EventDispatcher {
 // you will refine to it anyway), `holdMs` (default 50; 0: every level on
 // its own as soon as it is decoded): a level decoded waits up to that many
 // ms for the next ones the line brings by then, all applied in one go (see
-// refine).
+// refine), `worker` (where the stream is decoded: by default, in browsers
+// with Web Workers, a module worker, `new URL("./worker.js",
+// import.meta.url)`, started as soon as the file's JSON shows the
+// extension, so it is ready before the stream's bytes come; a URL or
+// string: that worker script instead (e.g. your bundle of
+// lodgen-three/worker.js); a Worker already started with it; false: on
+// the main thread, as where there are no workers; a worker that fails to
+// start falls back to the main thread, `workerError` says why).
 // Resolves, with the ProgressiveMesh, as soon
 // as the coarsest level is parsed (`.gltf`: draw it); `refine` swaps in the
 // stream's geometry once its base chunk is in ("level" event, records 0).
 // A file without the extension is loaded whole by `loader` (`.gltf` set,
 // nothing to refine).
-export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch, holdMs = 50 }) {
+export async function loadProgressive(url, { loader, meshoptDecoder, fetchOptions = {}, prefetch, holdMs = 50, worker }) {
   const t0 = performance.now();
   await meshoptDecoder.ready;
   // one request from the start of the file: lodgen writes the JSON, the
@@ -882,10 +973,11 @@ export async function loadProgressive(url, { loader, meshoptDecoder, fetchOption
   // (images, skins, animations) first, then the coarsest level
   const hi = meshRange(json, found.mesh)[1], lo = 0;
   const bin = new Uint8Array(binLength);
-  const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found });
+  const p = new ProgressiveMesh({ url, fetchOptions, meshoptDecoder, json, binStart, found, worker: startWorker(worker) });
   p.holdMs = holdMs;
   p.t0 = t0;
   p.mark("json");
+  if (p.inWorker) p.mark(p.decoder.session ? "worker reused" : "worker started");
   const wantRecords = prefetch === undefined ? 0 : p.levels[Math.max(0, Math.min(prefetch, p.levels.length - 1))];
   // the coarse level near the start (lodgen's files): read on to it
   const coarseNear = hi > lo && binStart + lo - file.have <= 65536;
