@@ -25,7 +25,11 @@
 //! and where the progressive full-detail time goes past its floor (line
 //! lag, the last chunk's decode and apply, the final draw; main-thread
 //! totals). `--bytes` writes the files and prints the stream's bytes per
-//! column kind instead (no browser).
+//! column kind instead (no browser). `--decode worker|main|both`: where the
+//! loader decodes the stream (its Web Worker, the default, or the page's
+//! main thread; `both`: each run loads the progressive file both ways, a
+//! table row each). `--cold`: the page loaded anew before each progressive
+//! load (the decoder's JIT cold, as in a page's one load).
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -112,18 +116,31 @@ struct Args {
     runs: Option<usize>,
     mesh: Option<String>,
     timeline: bool,
+    /// stream-bench.mjs's `--decode` and `--cold`, passed on
+    pass: Vec<String>,
 }
 
-/// `--quick`, `--bytes`, `--runs N`, `--mesh NAME`, `--timeline`.
+/// `--quick`, `--bytes`, `--runs N`, `--mesh NAME`, `--timeline`,
+/// `--decode MODE`, `--cold`.
 fn parse_args(args: &[String]) -> Result<Args> {
     let (mut quick, mut bytes_only, mut runs, mut timeline) = (false, false, None, false);
     let mut mesh = None;
+    let mut pass = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => quick = true,
             "--bytes" => bytes_only = true,
             "--timeline" => timeline = true,
+            "--cold" => pass.push(a.clone()),
+            "--decode" => {
+                let m = it.next().context("--decode needs worker, main or both")?;
+                anyhow::ensure!(
+                    ["worker", "main", "both"].contains(&m.as_str()),
+                    "stream-bench: --decode {m:?} (worker, main or both)"
+                );
+                pass.extend([a.clone(), m.clone()]);
+            }
             "--runs" => {
                 let n: usize = it.next().context("--runs needs a number")?.parse()?;
                 anyhow::ensure!(n > 0, "--runs needs at least 1");
@@ -146,6 +163,7 @@ fn parse_args(args: &[String]) -> Result<Args> {
         runs,
         mesh,
         timeline,
+        pass,
     })
 }
 
@@ -156,6 +174,7 @@ pub fn run(args: &[String]) -> Result<()> {
         runs,
         mesh,
         timeline,
+        pass,
     } = parse_args(args)?;
     let root = crate::workspace_root();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
@@ -208,6 +227,7 @@ pub fn run(args: &[String]) -> Result<()> {
             .arg(&plain)
             .args(["--name", id, "--runs", &n.to_string()])
             .args(timeline.then_some("--timeline"))
+            .args(&pass)
             .args([
                 "--mbit",
                 &MBIT.to_string(),
@@ -227,12 +247,16 @@ pub fn run(args: &[String]) -> Result<()> {
             line_ms(before),
             line_ms(before + stream),
         ];
-        rows.push((
-            id.to_string(),
-            r,
-            stream as f64 / plain_bytes as f64,
-            floors,
-        ));
+        let ratio = stream as f64 / plain_bytes as f64;
+        // `--decode both`: a row per decoder
+        match r["decoders"].as_object().filter(|d| d.len() > 1) {
+            Some(d) => {
+                for (mode, v) in d {
+                    rows.push((format!("{id} [{mode}]"), v.clone(), ratio, floors));
+                }
+            }
+            None => rows.push((id.to_string(), r, ratio, floors)),
+        }
     }
     if bytes_only {
         return Ok(());
