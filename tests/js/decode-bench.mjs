@@ -2,7 +2,7 @@
 // Decode speed of the LODGEN_progressive stream decoder in node: decodes the
 // whole stream of a progressive GLB `runs` times (64 KiB pushes), prints
 // wall and CPU microseconds per split for each run, and a signature of the
-// decoded records (to check two decoders agree).
+// decoded records, their wedges included (to check two decoders agree).
 //
 //   node decode-bench.mjs FILE.glb [runs] [DECODER.js]
 //
@@ -39,5 +39,7 @@ for (let r = 0; r < runs; r++) {
 }
 // hash of final output for identity check
 const mix = (arr) => { let x = 0; for (let i = 0; i < arr.length; i++) x = (Math.imul(x, 31) + (arr[i] >>> 0)) | 0; return x >>> 0; };
-const sig = [mix(d.faces0), mix(d.corners.a.subarray(0, d.corners.n)), mix(new Uint32Array(d.p0.buffer)), mix(new Uint32Array(d.p1.buffer)), mix(new Uint32Array(d.pm.buffer)), mix(d.v1), mix(d.cStart)].join(',');
+const sig = [mix(d.faces0), mix(d.corners.a.subarray(0, d.corners.n)), mix(new Uint32Array(d.p0.buffer)), mix(new Uint32Array(d.p1.buffer)), mix(new Uint32Array(d.pm.buffer)), mix(d.v1), mix(d.cStart),
+  // with wedges: the faces' and edited corners' wedges, each wedge's values and group
+  ...(d.wfaces0 ? [mix(d.wfaces0), mix(d.wafter.a.subarray(0, d.wafter.n)), mix(d.wbefore.a.subarray(0, d.wbefore.n)), mix(new Uint32Array(d.wvals.buffer)), mix(d.wgroups)] : [])].join(',');
 console.log(`${file.split('/').pop()} splits ${d.header.splitCount} us/split ${ts.map((t) => t.toFixed(2)).join(' ')} min ${Math.min(...ts).toFixed(2)} cpu ${cs.map((t) => t.toFixed(2)).join(' ')} sig ${sig}`);

@@ -242,7 +242,9 @@ window.runProgressive = async (url, { stopAt = 0, then, prepareFrame = true, kee
   }
   if (keep) window.progressive = p;
   return { firstPixel, events, prepared, timeline: p.timeline, received: p.received, coarseTriangles: p.coarseTriangles, quantized: p.quantized,
-    draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength, decodedIn: p.inWorker ? 'worker' : 'main', workerError: p.workerError || null };
+    draws, spent: p.spent, fullBytes: p.streamStart + p.streamLength, decodedIn: p.inWorker ? 'worker' : 'main', workerError: p.workerError || null,
+    // the drawn index's bytes per index, the stream's vertices and corners
+    indexBytes: p.geometry.index.array.BYTES_PER_ELEMENT, vertices: p.decoder.header.totalVertices, corners: 3 * p.decoder.header.totalTriangles };
 };
 
 // A file whose TEXCOORD_0 is normalized u16 with KHR_texture_transform:

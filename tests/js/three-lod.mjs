@@ -10,7 +10,8 @@
 // MSFT_lod level, coarse to fine, each drawing exactly the level's triangles
 // (renderer.info) with the level's index hash and its vertices at the
 // positions Rust decodes (f32 bits); the first pixel is the
-// coarsest level; the GLB is read from its start in one request (JSON,
+// coarsest level; the drawn index is 16-bit when the mesh has at most 65,535
+// vertices (as glTF files store it); the GLB is read from its start in one request (JSON,
 // coarsest level, stream); stopping at a middle level without prefetch reads
 // the stream's base on that request, the rest up to the level by one range
 // request, and fewer stream bytes; over a throttled line (50 Mbit/s) that
@@ -33,6 +34,9 @@
 // F.glb (written without --quantize: f32 positions, which the loader
 // computes from the records' grid points): every level draws the level's
 // triangles, index hash and position hash.
+// Before the browser, each file's stream decoded in node (lgpm.js) pushed 1,
+// 7, 1000 and 8192 bytes at a time decodes as pushed whole (records, grid
+// points, wedges, their values, the topology callbacks).
 // Exit 0 on success, 1 on failure, 2 on bad usage.
 
 import { execFileSync } from 'node:child_process';
@@ -79,11 +83,47 @@ function sameLevels(a, b) {
 }
 const levelList = (r) => r.events.map((e) => `${e.records}: ${e.drawn} triangles, hash ${e.hash}`).join('; ');
 
+// The stream of a progressive GLB decoded in node by lgpm.js's
+// StreamDecoder, its bytes pushed `size` at a time (0: at once): a
+// signature of everything the loader reads (records, grid points, wedges
+// and their values) and the onTopology calls (k: records), so that every
+// split of the bytes can be checked to decode the same (a chunk's
+// topology, its wedge ids, its wedges' values and its positions are each
+// decoded as soon as their columns are in).
+function decodeSplit(StreamDecoder, mo, glbPath, size) {
+  const b = fs.readFileSync(glbPath), jl = b.readUInt32LE(12), json = JSON.parse(b.subarray(20, 20 + jl).toString());
+  let ext = null;
+  for (const m of json.meshes) for (const p of m.primitives) if (p.extensions && p.extensions.LODGEN_progressive) ext = p.extensions.LODGEN_progressive;
+  const bv = json.bufferViews[ext.bufferView], at = 28 + jl + (bv.byteOffset || 0);
+  const s = new Uint8Array(b.buffer, b.byteOffset + at, bv.byteLength);
+  const d = new StreamDecoder(mo), topology = [];
+  d.floats = false;
+  d.onTopology = (k) => topology.push(`${k}:${d.wfaces0 ? d.nw : ''}`);
+  const step = size || s.length;
+  for (let i = 0; i < s.length; i += step) d.push(s.subarray(i, Math.min(s.length, i + step)));
+  const mix = (arr) => { let x = 0; for (let i = 0; i < arr.length; i++) x = (Math.imul(x, 31) + (arr[i] >>> 0)) | 0; return x >>> 0; };
+  const w = d.wfaces0 ? [d.wfaces0, d.wafter.a.subarray(0, d.wafter.n), new Uint32Array(d.wvals.buffer), d.wgroups] : [];
+  return `${d.count} records; ${[d.faces0, d.corners.a.subarray(0, d.corners.n), d.v1, d.fStart, d.cStart, d.q1, d.q0, ...w].map(mix).join(',')}; topology ${topology.join(' ')}`;
+}
+
 async function main() {
   const o = parseArgs(process.argv.slice(2));
   const expect = JSON.parse(execFileSync(o.lodgen, ['view', '--print-levels', o.files[0]], { encoding: 'utf8' }));
   const levels = expect.levels; // finest first
   fs.mkdirSync(o.out, { recursive: true });
+  {
+    // the decoder in node: any split of the bytes decodes the same
+    const { StreamDecoder } = await import('../../crates/lodgen/web/three/lgpm.js');
+    const { MeshoptDecoder } = await import('meshoptimizer');
+    await MeshoptDecoder.ready;
+    for (const f of [o.files[0], o.attributes, o.float].filter(Boolean)) {
+      const whole = decodeSplit(StreamDecoder, MeshoptDecoder, f, 0);
+      for (const size of [1, 7, 1000, 8192]) {
+        const got = decodeSplit(StreamDecoder, MeshoptDecoder, f, size);
+        check(got === whole, `${path.basename(f)}: the stream pushed ${size} byte(s) at a time decodes as pushed whole (${got === whole ? whole : `${got}, whole: ${whole}`})`);
+      }
+    }
+  }
   const requests = [];
   const routes = {
     '/': { type: 'text/html; charset=utf-8', body: Buffer.from(HTML) },
@@ -134,6 +174,8 @@ async function main() {
     check(r.events.every((e) => e.drawnSet === e.stateSet) && r.events[r.events.length - 1].reordered,
       `every level draws its index state's triangles (order-independent hashes ${r.events.map((e) => `${e.drawnSet}/${e.stateSet}`).join(', ')}), ` +
         `the finest in the split tree's draw order (${r.events.map((e) => e.reordered).join(', ')})`);
+    check(r.indexBytes === (r.vertices <= 65535 ? 2 : 4),
+      `the drawn index is ${8 * r.indexBytes}-bit for ${r.vertices} vertices (16-bit below 65,535, as glTF stores such meshes)`);
     check(r.firstPixel.drawn === want[0].triangles && r.firstPixel.variance > MIN_VARIANCE,
       `first pixel: the coarsest level drawn (${r.firstPixel.drawn} triangles, variance ${r.firstPixel.variance.toFixed(1)}) at ${r.firstPixel.t.toFixed(0)} ms`);
     check(r.coarseTriangles === want[0].triangles,
@@ -231,6 +273,8 @@ async function main() {
             `${e.attr}, position hash ${e.pos} (expected ${lv.records}, ${lv.triangles}, ${lv.indexHash}, ${lv.attributeHash}, ` +
             `${lv.positionHash}); attributes ${e.attributes}`);
       });
+      check(a.indexBytes === (a.corners <= 65535 ? 2 : 4),
+        `attributes: the drawn index (one vertex per (vertex, wedge) pair, at most one per corner) is ${8 * a.indexBytes}-bit for ${a.corners} corners`);
       const last = a.events[a.events.length - 1];
       check(/\bnormal\b/.test(last.attributes) && /\buv\b/.test(last.attributes) && last.variance > MIN_VARIANCE,
         `attributes: the finest level draws streamed normals and UVs (${last.attributes}), not blank (variance ${last.variance.toFixed(1)})`);

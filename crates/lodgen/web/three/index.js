@@ -39,7 +39,7 @@ import {
   Vector3,
 } from "three";
 import { StreamDecoder, parseHeader } from "./lgpm.js";
-import { splitTreeOrder } from "./order.js";
+import { indexArray, splitTreeOrder } from "./order.js";
 import { RemoteDecoder } from "./remote.js";
 
 const EXTENSION = "LODGEN_progressive";
@@ -324,7 +324,7 @@ export class ProgressiveMesh extends EventDispatcher {
     const g = new BufferGeometry();
     const Pos = this.quantized ? Int16Array : Float32Array;
     // the index state (vertex ids) and each vertex's position
-    this.indices = new Uint32Array(Math.max(3, h.totalTriangles * 3));
+    this.indices = indexArray(h.totalVertices, Math.max(3, h.totalTriangles * 3));
     this.vpos = new Pos(h.totalVertices * 3);
     if (h.wedges) this.cornerGeometry(g, Pos);
     else {
@@ -375,7 +375,7 @@ export class ProgressiveMesh extends EventDispatcher {
     // each corner's pair (the drawn index), each pair's vertex and wedge,
     // and per vertex its pairs' list (head, stamped per rebuild; next)
     this.pairs = {
-      index: new Uint32Array(n), v: new Uint32Array(n), w: new Uint32Array(n), next: new Int32Array(n),
+      index: indexArray(n, n), v: new Uint32Array(n), w: new Uint32Array(n), next: new Int32Array(n),
       head: new Int32Array(h.totalVertices), stamp: new Uint32Array(h.totalVertices), now: 0, count: 0,
     };
     g.setIndex(new BufferAttribute(this.pairs.index, 1));
@@ -747,7 +747,7 @@ export class ProgressiveMesh extends EventDispatcher {
     const t = performance.now();
     // (a new array while the one there is drawn: it is the GPU's until replaced)
     const old = this.drawOrder && this.drawOrder.index, g = this.geometry;
-    const index = old && !(g && g.index.array === old) ? old : new Uint32Array(Math.max(3, 3 * h.totalTriangles));
+    const index = old && !(g && g.index.array === old) ? old : indexArray(h.totalVertices, Math.max(3, 3 * h.totalTriangles));
     splitTreeOrder(tri, d.fStart[k], d.v1, h.baseVertices, k, index);
     this.drawOrder = { records: k, index };
     this.spent.order += performance.now() - t;

@@ -13,8 +13,9 @@
 //                                  // (p1 / pm / p0 null after d.floats = false)
 //
 // A chunk's topology (and wedges) is replayed block by block (BLOCK_RECORDS
-// records each) as soon as each block's columns are in, its positions once
-// the chunk is whole. Records
+// records each) as soon as each block's topology columns and wedge
+// references are in (the new wedges' values once their columns follow),
+// its positions once the chunk is whole. Records
 // are kept in typed arrays (see StreamDecoder), nothing is allocated per
 // record. Positions come out as grid points (d.q, Uint16Array, 3 per
 // vertex) and as f32 (center + (q - s) / s * half in double precision,
@@ -479,7 +480,8 @@ export class StreamDecoder {
       this.fpred = new Uint32Array(w.fstride);
       this.f32 = new Float32Array(1);
       this.f32Bits = new Uint32Array(this.f32.buffer);
-      this.cand = [];
+      this.cand = new Uint32Array(64);
+      this.candN = 0;
       this.nw = 0;
       this.cw = new Uint32Array(nc);
       this.cw.fill(NONE, 0, 3 * h.baseTriangles);
@@ -489,6 +491,7 @@ export class StreamDecoder {
       const wc = this.wedgeColumns(cols);
       for (let i = 0; i < 3 * h.baseTriangles; i++) wc.next((i / 3) | 0, i % 3, undefined, null);
       wc.finish();
+      wc.values(cols);
       this.baseCW = this.cw.slice(0, 3 * h.baseTriangles);
       this.wfaces0.set(this.baseCW, 0);
     }
@@ -590,19 +593,43 @@ export class StreamDecoder {
   // The candidate wedges of corner (t, s) (docs/LODGEN_progressive.md):
   // wedges at its vertex in the triangles sharing an edge with t, then
   // `before`, then every other wedge at the vertex.
-  candidates(t, s, before) {
-    const tri = this.tri, cw = this.cw, cand = this.cand, next = this.nextC;
-    cand.length = 0;
+  // (this.cand[0 .. this.candN]; nothing allocated but when it grows).
+  // Only the first `need` are wanted: the list stops there.
+  candidates(t, s, before, need) {
+    const tri = this.tri, cw = this.cw, next = this.nextC;
+    this.candN = 0;
     const o = 3 * t, u = tri[o + s], a = tri[o + ((s + 1) % 3)], b = tri[o + ((s + 2) % 3)];
-    const push = (w) => { if (w !== NONE && !cand.includes(w)) cand.push(w); };
     for (let c = this.head[u]; c !== NONE; c = next[c]) {
       const p = c - (c % 3);
       if (p === o) continue;
       const g0 = tri[p], g1 = tri[p + 1], g2 = tri[p + 2];
-      if ((a !== u && (g0 === a || g1 === a || g2 === a)) || (b !== u && (g0 === b || g1 === b || g2 === b))) push(cw[c]);
+      if ((a !== u && (g0 === a || g1 === a || g2 === a)) || (b !== u && (g0 === b || g1 === b || g2 === b))) {
+        this.candPush(cw[c]);
+        if (this.candN >= need) return;
+      }
     }
-    if (before !== undefined) push(before);
-    for (let c = this.head[u]; c !== NONE; c = next[c]) if (c - (c % 3) !== o) push(cw[c]);
+    if (before !== undefined) {
+      this.candPush(before);
+      if (this.candN >= need) return;
+    }
+    for (let c = this.head[u]; c !== NONE; c = next[c]) {
+      if (c - (c % 3) === o) continue;
+      this.candPush(cw[c]);
+      if (this.candN >= need) return;
+    }
+  }
+
+  // w joins the candidates unless NONE or there already.
+  candPush(w) {
+    if (w === NONE) return;
+    const cand = this.cand, n = this.candN;
+    for (let i = 0; i < n; i++) if (cand[i] === w) return;
+    if (n === cand.length) {
+      this.cand = new Uint32Array(2 * n);
+      this.cand.set(cand);
+    }
+    this.cand[n] = w;
+    this.candN = n + 1;
   }
 
   // The wedges predicting a new wedge's values at corner (t, s):
@@ -627,63 +654,29 @@ export class StreamDecoder {
     for (const i of [(s + 1) % 3, (s + 2) % 3]) if (cw[o + i] !== NONE) return [1, cw[o + i]];
     return [0];
   }
-  // wedge references of a chunk: refs, groups, values; next(t, s, before,
-  // rec) = the wedge of corner (t, s), recorded there
+  // The wedge columns of a block (or of the base corners): the references
+  // and groups first; next(t, s, before, rec) = the wedge of corner (t, s),
+  // recorded there, a new wedge numbered and its predictor kept; then
+  // values(cols), once the channel columns are in (they follow the
+  // references: the block's topology and wedge ids are replayed while they
+  // download), gives the new wedges their values, in the order defined.
   wedgeColumns(cols) {
     const w = this.header.wedges, dec = this;
     const refs = cols.u32("wedge reference");
     let fresh = 0;
     for (const c of refs) if (c === 0) fresh++;
     const groups = w.groups > 1 ? cols.u32("wedge group", fresh) : null;
-    // per channel: zigzag f32 bit residuals, or quantized residuals (padded lanes)
-    const values = w.channels.map((c) => {
-      if (c.encoding === 0) {
-        const b = cols.vertices("attribute", 4 * c.components, fresh);
-        const z = new Uint32Array(b.buffer, b.byteOffset, b.length / 4);
-        for (let i = 0; i < z.length; i++) z[i] = (z[i] >>> 1) ^ -(z[i] & 1);
-        return z;
-      }
-      const b = cols.vertices("attribute", 2 * c.padded, fresh);
-      const sums = new Uint16Array(b.buffer, b.byteOffset, b.length / 2), res = new Uint16Array(sums.length);
-      for (let i = 0; i < sums.length; i++) res[i] = i < c.padded ? sums[i] : sums[i] - sums[i - c.padded];
-      return res;
-    });
+    // per new wedge: its predictor (kind, a, b, c; see predictor)
+    const preds = new Uint32Array(4 * fresh), firstId = dec.nw;
     let pos = 0, k = 0;
     const define = (t, s, rec) => {
       if (dec.nw >= w.total) throw new Error(`more wedges than the ${w.total} announced`);
       const g = groups ? groups[k] : 0;
       if (g >= w.groups) throw new Error(`wedge group ${g} out of range`);
-      const id = dec.nw;
-      dec.wgroups[id] = g;
-      const p = dec.predictor(t, s, rec), qp = dec.qpred, fp = dec.fpred, qs = w.qstride, fs = w.fstride;
-      if (p[0] === 0) { qp.fill(0); fp.fill(0); }
-      else if (p[0] === 1) {
-        for (let i = 0; i < qs; i++) qp[i] = dec.qv[p[1] * qs + i];
-        for (let i = 0; i < fs; i++) fp[i] = dec.fvBits[p[1] * fs + i];
-      } else {
-        for (let i = 0; i < qs; i++) qp[i] = dec.qv[p[1] * qs + i] + dec.qv[p[2] * qs + i] - dec.qv[p[3] * qs + i];
-        for (let i = 0; i < fs; i++) {
-          const x = Math.fround(dec.fv[p[1] * fs + i] + dec.fv[p[2] * fs + i] - dec.fv[p[3] * fs + i]);
-          if (Number.isFinite(x)) { dec.f32[0] = x; fp[i] = dec.f32Bits[0]; } else fp[i] = 0;
-        }
-      }
-      w.channels.forEach((c, ci) => {
-        const out = id * w.stride + c.offset;
-        if (c.encoding === 0) {
-          for (let j = 0; j < c.components; j++) {
-            const bits = (fp[c.flane + j] + values[ci][k * c.components + j]) >>> 0;
-            dec.fvBits[id * fs + c.flane + j] = bits;
-            dec.wvalsBits[out + j] = bits;
-          }
-        } else {
-          for (let j = 0; j < c.components; j++) {
-            const q = (qp[c.qlane + j] + values[ci][k * c.padded + j]) & 0xffff;
-            if (q > ENC_MAX[c.encoding]) throw new Error(`attribute value ${q} over ${ENC_MAX[c.encoding]}`);
-            dec.qv[id * qs + c.qlane + j] = q;
-            dec.wvals[out + j] = dequantize(c, q);
-          }
-        }
-      });
+      dec.wgroups[dec.nw] = g;
+      const p = dec.predictor(t, s, rec);
+      preds[4 * k] = p[0];
+      for (let i = 1; i < p.length; i++) preds[4 * k + i] = p[i];
       k++;
       return dec.nw++;
     };
@@ -691,11 +684,12 @@ export class StreamDecoder {
       next(t, s, before, rec) {
         if (pos >= refs.length) throw new Error("the wedge reference column ends early");
         const code = refs[pos++];
-        dec.candidates(t, s, before);
         let id;
         if (code === 0) id = define(t, s, rec);
         else {
-          const n = dec.cand.length;
+          // (candidate `code`, or, past the list's end, its length)
+          dec.candidates(t, s, before, code);
+          const n = dec.candN;
           if (code <= n) id = dec.cand[code - 1];
           else if (code - n <= dec.nw) id = dec.nw - (code - n);
           else throw new Error(`wedge reference ${code} out of range`);
@@ -705,6 +699,53 @@ export class StreamDecoder {
       },
       finish() {
         if (pos !== refs.length) throw new Error("wedge references left over");
+      },
+      values(cols) {
+        // per channel: zigzag f32 bit residuals, or quantized residuals (padded lanes)
+        const values = w.channels.map((c) => {
+          if (c.encoding === 0) {
+            const b = cols.vertices("attribute", 4 * c.components, fresh);
+            const z = new Uint32Array(b.buffer, b.byteOffset, b.length / 4);
+            for (let i = 0; i < z.length; i++) z[i] = (z[i] >>> 1) ^ -(z[i] & 1);
+            return z;
+          }
+          const b = cols.vertices("attribute", 2 * c.padded, fresh);
+          const sums = new Uint16Array(b.buffer, b.byteOffset, b.length / 2), res = new Uint16Array(sums.length);
+          for (let i = 0; i < sums.length; i++) res[i] = i < c.padded ? sums[i] : sums[i] - sums[i - c.padded];
+          return res;
+        });
+        const qp = dec.qpred, fp = dec.fpred, qs = w.qstride, fs = w.fstride;
+        for (let j = 0; j < k; j++) {
+          const id = firstId + j, kind = preds[4 * j], a = preds[4 * j + 1], b = preds[4 * j + 2], c = preds[4 * j + 3];
+          if (kind === 0) { qp.fill(0); fp.fill(0); }
+          else if (kind === 1) {
+            for (let i = 0; i < qs; i++) qp[i] = dec.qv[a * qs + i];
+            for (let i = 0; i < fs; i++) fp[i] = dec.fvBits[a * fs + i];
+          } else {
+            for (let i = 0; i < qs; i++) qp[i] = dec.qv[a * qs + i] + dec.qv[b * qs + i] - dec.qv[c * qs + i];
+            for (let i = 0; i < fs; i++) {
+              const x = Math.fround(dec.fv[a * fs + i] + dec.fv[b * fs + i] - dec.fv[c * fs + i]);
+              if (Number.isFinite(x)) { dec.f32[0] = x; fp[i] = dec.f32Bits[0]; } else fp[i] = 0;
+            }
+          }
+          for (let ci = 0; ci < w.channels.length; ci++) {
+            const ch = w.channels[ci], out = id * w.stride + ch.offset, r = values[ci];
+            if (ch.encoding === 0) {
+              for (let m = 0; m < ch.components; m++) {
+                const bits = (fp[ch.flane + m] + r[j * ch.components + m]) >>> 0;
+                dec.fvBits[id * fs + ch.flane + m] = bits;
+                dec.wvalsBits[out + m] = bits;
+              }
+            } else {
+              for (let m = 0; m < ch.components; m++) {
+                const q = (qp[ch.qlane + m] + r[j * ch.padded + m]) & 0xffff;
+                if (q > ENC_MAX[ch.encoding]) throw new Error(`attribute value ${q} over ${ENC_MAX[ch.encoding]}`);
+                dec.qv[id * qs + ch.qlane + m] = q;
+                dec.wvals[out + m] = dequantize(ch, q);
+              }
+            }
+          }
+        }
       },
     };
   }
@@ -720,8 +761,19 @@ export class StreamDecoder {
       this.topo = { cols, wc: null, first: this.count, done: 0, va: this.nv, rings: new U32List(8 * n + 8), ringEnd: new Uint32Array(n) };
     }
     const topo = this.topo, cols = topo.cols, w = h.wedges;
-    const before = 4 + (w ? 1 + (w.groups > 1 ? 1 : 0) + w.channels.length : 0);
-    while (topo.done < n) {
+    // a block's columns before its replay: v1, face codes, escapes, corner
+    // mask (and the wedge references and groups); its wedges' values
+    // (one column per channel) are needed only after it
+    const before = 4 + (w ? 1 + (w.groups > 1 ? 1 : 0) : 0);
+    for (;;) {
+      if (topo.wc) {
+        // a block replayed, its new wedges waiting for their values
+        if (!whole && !columnsIn(bytes, cols.r.pos, have, w.channels.length)) return;
+        topo.wc.values(cols);
+        topo.wc = null;
+        if (topo.done === n && this.onTopology) this.onTopology(topo.first + n);
+      }
+      if (topo.done === n) break;
       if (!whole && !columnsIn(bytes, cols.r.pos, have, before)) return;
       const m = Math.min(BLOCK_RECORDS, n - topo.done), at = topo.first + topo.done;
       const v1s = cols.u32("split vertex", m);
@@ -735,7 +787,8 @@ export class StreamDecoder {
       if (topo.wc) topo.wc.finish();
       topo.done += m;
       // the chunk's topology is whole: tri holds the index state after it
-      if (topo.done === n && this.onTopology) this.onTopology(topo.first + n);
+      // (with wedges: once their values are in, above)
+      if (!topo.wc && topo.done === n && this.onTopology) this.onTopology(topo.first + n);
     }
     if (!whole) return;
     const { first, va } = topo;

@@ -61,3 +61,11 @@ export function splitTreeOrder(tri, nt, v1, baseVertices, records, out) {
   }
   return out;
 }
+
+// An index array for `n` indices into `vertices` vertices: 16-bit when
+// every index fits below 65535 (WebGL2 restarts primitives at 0xffff), as
+// glTF files of such meshes store them (the plain file's draw uploads half
+// the index bytes a 32-bit one would), else 32-bit.
+export function indexArray(vertices, n) {
+  return vertices <= 65535 ? new Uint16Array(n) : new Uint32Array(n);
+}

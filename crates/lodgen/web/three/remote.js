@@ -28,7 +28,7 @@
 // `onFail(bytes)` hands them back for a decoder on the main thread.
 
 import { StreamDecoder } from "./lgpm.js";
-import { splitTreeOrder } from "./order.js";
+import { indexArray, splitTreeOrder } from "./order.js";
 
 // The worker side: answer `scope`'s messages (see the top of this file).
 export function serveDecoder(scope, meshoptDecoder) {
@@ -86,7 +86,7 @@ export function serveDecoder(scope, meshoptDecoder) {
     if (k === goal && !d.header.wedges) {
       const t = performance.now();
       // (as long as the index state: the geometry switches between the two)
-      m.order = splitTreeOrder(d.tri, d.fStart[k], d.v1, d.header.baseVertices, k, new Uint32Array(Math.max(3, 3 * d.header.totalTriangles)));
+      m.order = splitTreeOrder(d.tri, d.fStart[k], d.v1, d.header.baseVertices, k, indexArray(d.header.totalVertices, Math.max(3, 3 * d.header.totalTriangles)));
       m.orderMs = performance.now() - t;
       transfer.push(m.order.buffer);
     }
