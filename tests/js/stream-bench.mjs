@@ -32,7 +32,9 @@
 // its plain run, so the pair shares the machine's load); `--timeline`: each
 // run's loader timeline and where the progressive full-detail time goes past
 // its floor (line lag: the stream's last byte after its floor; then the
-// last chunk's decoding, applying, normals, the final draw), with the
+// last chunk's decoding, applying, normals, the final draw; with the
+// worker, when it had the last chunk's topology replayed and its positions
+// decoded, from its own marks in the loader's timeline), with the
 // main-thread totals of the whole load (coarse parse, decode, apply,
 // normals, draws), and after each load 5 more frames of the scene: their
 // wall median and the CPU ms per frame of Chromium's GPU process, where
@@ -98,14 +100,23 @@ function breakdown(prog, floorFull) {
     const applied = tl.slice(dec).find((x) => x.what.startsWith('applied '));
     tail.apply = applied ? applied.t - tl[dec].t : NaN;
   }
+  // the worker's own marks of the last chunk (its topology replayed, its
+  // positions decoded; NaN on the main thread), after the last byte
+  const lastWorker = (what) => { const m = tl.filter((x) => x.what.startsWith(`worker ${what} `)).pop(); return m ? m.t - last : NaN; };
   return {
     lag: last - floorFull, tail: full - last, tailDecode: tail.decode, tailApply: tail.apply, finalDraw: tail.draw,
+    workerReplayed: lastWorker('replayed'), workerDecoded: lastWorker('decoded'),
     // bytes the final draw handed to WebGL buffers (MB)
     finalUpload: lastDraw.uploaded / 1e6,
     parse: at('coarse parsed') - at('coarse bytes'), decode: prog.spent.decode, apply: prog.spent.apply,
     normals: prog.spent.normals, order: prog.spent.order, worker: prog.spent.worker || 0, draws: prog.draws.length, drawMs: prog.draws.reduce((a, d) => a + d.ms, 0), marks: k,
   };
 }
+
+// With the worker: when it had the last chunk's topology replayed and its
+// positions decoded, ms after the last byte (negative: before it).
+const workerTail = (q) => (Number.isFinite(q.workerDecoded)
+  ? ` = the worker's last replay at ${q.workerReplayed.toFixed(0)}, its positions at ${q.workerDecoded.toFixed(0)}, then the page` : '');
 
 // CPU ms (user + system) spent so far by this process's Chromium GPU
 // processes (SwiftShader draws there): a frame's cost that the machine's
@@ -165,7 +176,7 @@ function progressiveRun(o, r, mode, runs, plain, plainFrame, prog, progFrame, re
       '; draws: ' + prog.draws.map((d) => `at ${d.t.toFixed(0)} ${d.ms.toFixed(0)} ms`).join(', '));
     console.log(`  plain: loaded ${(plain.loaded - floorOf(fs.statSync(o.plain).size)).toFixed(0)} ms past its floor, draw ${plain.drawMs.toFixed(0)} ms, then a frame ${plainFrame.wall.toFixed(0)} ms, GPU CPU ${plainFrame.cpu.toFixed(0)} ms ` +
       `(progressive at full detail ${progFrame.wall.toFixed(0)} ms, GPU CPU ${progFrame.cpu.toFixed(0)} ms); ` +
-      `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}, ` +
+      `progressive past its floor: line lag ${parts.lag.toFixed(0)} ms, then ${parts.tail.toFixed(0)} ms (decode ${parts.tailDecode.toFixed(0)}${workerTail(parts)}, ` +
       `apply + normals ${parts.tailApply.toFixed(0)}, final draw ${parts.finalDraw.toFixed(0)} uploading ${parts.finalUpload.toFixed(2)} MB; plain's draw ` +
       `${(plain.uploaded / 1e6).toFixed(2)} MB); whole load: parse ${parts.parse.toFixed(0)}, ` +
       `decode ${parts.decode.toFixed(0)} (worker ${parts.worker.toFixed(0)}), apply ${parts.apply.toFixed(0)}, normals ${parts.normals.toFixed(0)}, draw order ${parts.order.toFixed(0)}, ${parts.draws} draws ${parts.drawMs.toFixed(0)} ms`);
@@ -193,7 +204,7 @@ function summary(o, runs, tag) {
   if (o.timeline) {
     const q = res.parts;
     console.log(`${name} medians: plain past its floor: loaded +${res.plainParts.lag.toFixed(0)} ms, draw ${res.plainParts.draw.toFixed(0)} ms; ` +
-      `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}, ` +
+      `progressive full past its floor: line lag ${q.lag.toFixed(0)} ms, after the last byte ${q.tail.toFixed(0)} ms (decode ${q.tailDecode.toFixed(0)}${workerTail(q)}, ` +
       `apply + normals ${q.tailApply.toFixed(0)}, final draw ${q.finalDraw.toFixed(0)} uploading ${q.finalUpload.toFixed(2)} MB, ` +
       `plain's ${res.plainParts.upload.toFixed(2)} MB); whole load main thread: parse ${q.parse.toFixed(0)}, ` +
       `decode ${q.decode.toFixed(0)} (the worker's own ${q.worker.toFixed(0)}), apply ${q.apply.toFixed(0)}, normals ${q.normals.toFixed(0)}, draw order ${q.order.toFixed(0)}, ${q.draws} draws ${q.drawMs.toFixed(0)} ms; ` +

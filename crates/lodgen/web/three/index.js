@@ -272,6 +272,7 @@ export class ProgressiveMesh extends EventDispatcher {
       this.prepare(k);
     };
     if (!this.inWorker) return;
+    d.onMark = (what, t) => this.mark(what, t);
     d.onProgress = () => {
       this.fetched = d.chunksDone;
       this.spent.worker = d.workerMs;
@@ -352,9 +353,14 @@ export class ProgressiveMesh extends EventDispatcher {
   }
 
   // A point of the load's timeline (this.timeline: {what, t, bytes}; t in
-  // ms from the load's start, bytes = stream bytes received so far).
-  mark(what) {
-    this.timeline.push({ what, t: performance.now() - this.t0, bytes: this.received });
+  // ms from the load's start, bytes = stream bytes received so far); `at`
+  // (performance.now() time): a point the decoder's worker reported,
+  // placed in time order.
+  mark(what, at) {
+    const t = (at === undefined ? performance.now() : at) - this.t0, tl = this.timeline;
+    let i = tl.length;
+    while (at !== undefined && i > 0 && tl[i - 1].t > t) i--;
+    tl.splice(i, 0, { what, t, bytes: this.received });
   }
 
   // A stream with wedges: drawn indexed, one vertex per distinct (vertex,

@@ -14,6 +14,8 @@
 //                                  positions download (the decoder's onTopology)
 //   chunk     c, records first..k: q1, q0 (grid points at the chunk's end),
 //             ms: the worker's decoding time so far
+// (topology and chunk messages also carry `at`: when the worker had them
+// done, performance.timeOrigin + now, for the loader's timeline)
 //   error     message              a malformed stream (the decoder stops)
 // and takes {bytes} (any split of the stream, in order), {goal: records}
 // and {reset: session} (a new stream: a worker serves one load at a time,
@@ -56,7 +58,7 @@ export function serveDecoder(scope, meshoptDecoder) {
         continue;
       }
       const first = h.chunks[posted - 1].records, k = h.chunks[posted].records;
-      const m = { type: "chunk", c: posted, first, k, q1: d.q1.slice(3 * first, 3 * k), q0: d.q0.slice(3 * first, 3 * k), ms };
+      const m = { type: "chunk", c: posted, first, k, q1: d.q1.slice(3 * first, 3 * k), q0: d.q0.slice(3 * first, 3 * k), ms, at: performance.timeOrigin + performance.now() };
       post(m, [m.q1.buffer, m.q0.buffer]);
     }
   };
@@ -83,6 +85,8 @@ export function serveDecoder(scope, meshoptDecoder) {
       m.wafter = d.wafter.a.slice(c0, c1);
       transfer.push(m.wfaces.buffer, m.wafter.buffer);
     }
+    // (when, on the page's clock's origin: the loader's timeline)
+    m.at = performance.timeOrigin + performance.now();
     if (k === goal && !d.header.wedges) {
       const t = performance.now();
       // (as long as the index state: the geometry switches between the two)
@@ -150,6 +154,7 @@ export class RemoteDecoder {
     this.orderMs = 0; // ... and ordering (the draw order)
     this.onTopology = null;
     this.onProgress = null;
+    this.onMark = null; // (what, t): a point of the worker's, on the page's clock
     this.onError = null;
     this.onFail = null;
     // main-thread ms taking the worker's messages in
@@ -266,10 +271,17 @@ export class RemoteDecoder {
     }
     if (this.header.wedges) this.wedges(m);
     if (m.orderMs) this.orderMs += m.orderMs;
+    this.workerMark(`replayed ${k}`, m.at);
+    if (m.order) this.workerMark(`ordered ${k}`, m.at + m.orderMs);
     return this.onTopology && (() => this.onTopology(k, m.order || null));
   }
 
+  workerMark(what, at) {
+    if (this.onMark && at > 0) this.onMark(`worker ${what}`, at - performance.timeOrigin);
+  }
+
   chunk(m) {
+    this.workerMark(`decoded ${m.k}`, m.at);
     this.q1.set(m.q1, 3 * m.first);
     this.q0.set(m.q0, 3 * m.first);
     this.workerMs = m.ms;
