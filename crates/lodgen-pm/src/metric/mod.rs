@@ -184,8 +184,14 @@ pub(crate) fn corner_box(
         .fold(empty, |(mut lo, mut hi), t| {
             for p in t.iter().filter_map(|&v| at(v)) {
                 for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
+                    // (one compare each, not `f64::min`'s NaN handling: a NaN is left out
+                    // either way, and a zero's sign moves no code, extent or diagonal)
+                    if p[k] < lo[k] {
+                        lo[k] = p[k];
+                    }
+                    if p[k] > hi[k] {
+                        hi[k] = p[k];
+                    }
                 }
             }
             (lo, hi)

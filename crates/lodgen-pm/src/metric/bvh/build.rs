@@ -89,10 +89,12 @@ pub(super) fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3
 }
 
 /// Ranges of at most this many triangles get their binary tree built whole ([`morton_tree`]),
-/// collapsed and freed (≈ 2.7 MB of scratch); above it [`wide_tree`] finds the few binary nodes
+/// collapsed and freed (≈ 5.4 MB of scratch); above it [`wide_tree`] finds the few binary nodes
 /// it opens one at a time. So the whole binary tree (≈ 41 bytes a triangle, as much as the
-/// 4-wide nodes) never exists.
-const CHUNK: usize = 1 << 16;
+/// 4-wide nodes) never exists. (2¹⁶ until session 23: a mesh just above it, the bunny's 69,451
+/// triangles, had its triangles' corners scanned three more times for the boxes above the
+/// chunks, 1.5 % of a bunny run's instructions; the tree is the same for any size.)
+const CHUNK: usize = 1 << 17;
 
 /// The 4-wide query nodes, and what the binary tree they were collapsed from had at its root.
 pub(super) struct Wide {
@@ -135,7 +137,13 @@ fn wide_tree_in(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3], chunk: 
         b
     };
     let mut memo = std::collections::BTreeMap::new();
-    let root_box = range_box(codes, &scan, &mut memo, chunk, 0, n);
+    // (a root of at most `chunk` triangles gets its box from its binary tree below: a scan
+    // of every corner fewer)
+    let mut root_box = if n > chunk || n <= MAX_LEAF {
+        range_box(codes, &scan, &mut memo, chunk, 0, n)
+    } else {
+        Aabb::EMPTY
+    };
     if n <= MAX_LEAF {
         let root = (n > 0).then_some(BuildNode {
             min: root_box.min,
@@ -158,6 +166,13 @@ fn wide_tree_in(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3], chunk: 
     while let Some((first, count, d, ni, parent)) = work.pop() {
         if count <= chunk {
             let (build, levels) = morton_tree(&codes[first..first + count], |s| corners(first + s));
+            if count == n {
+                // (the same `f32` minima and maxima as a scan: see `range_box`)
+                root_box = Aabb {
+                    min: build[0].min,
+                    max: build[0].max,
+                };
+            }
             collapse_into(&build, &mut nodes, ni, parent, first as u32);
             depth = depth.max(d + levels);
             continue;
