@@ -145,6 +145,27 @@ fn gltf_with_data_uri() {
     check_scene(&s);
 }
 
+/// A file that is neither GLB nor JSON says so (not "invalid glTF JSON:
+/// expected value at line 1 column 1"); a JSON document after a UTF-8 byte
+/// order mark reads.
+#[test]
+fn not_gltf_at_all_says_so_and_a_byte_order_mark_reads() {
+    for bytes in [&b"\x89PNG\r\n\x1a\n...."[..], b"", b"solid cube\n"] {
+        let e = read_gltf(bytes, Path::new("x.glb")).unwrap_err();
+        assert_eq!(e.location, Location::File);
+        let text = e.to_string();
+        assert!(
+            text.starts_with("x.glb: not a glTF file: neither the GLB magic"),
+            "{text}"
+        );
+    }
+    let (doc, bin) = document();
+    let mut bytes = b"\xEF\xBB\xBF".to_vec();
+    bytes.extend(gltf_bytes(doc, &bin));
+    let s = read_gltf(&bytes, Path::new("bom.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    check_scene(&s);
+}
+
 #[test]
 fn glb_from_file_and_external_bin() {
     let (doc, bin) = document();

@@ -88,11 +88,7 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         strict: opts.strict,
         budget: std::cell::Cell::new(0),
     };
-    let (json, blob) = if src.starts_with(b"glTF") {
-        r.split_glb(src)?
-    } else {
-        (src, None)
-    };
+    let (json, blob) = r.split(src)?;
     // The JSON as written: what the writer copies (the typed document
     // widens f32 numbers and drops what it has no field for), and the
     // EXT_meshopt_compression data, which the typed document lacks
@@ -224,6 +220,28 @@ impl Reader<'_> {
     }
 
     /// Splits a GLB container into its JSON chunk and optional BIN chunk.
+    /// The JSON and the GLB's binary chunk (if any) of a file: a GLB, or a
+    /// JSON object (after a UTF-8 byte order mark, which some editors
+    /// write); anything else is an error saying so.
+    fn split<'s>(&self, src: &'s [u8]) -> Result<(&'s [u8], Option<&'s [u8]>), ReadError> {
+        let src = src.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(src);
+        if src.starts_with(b"glTF") {
+            return self.split_glb(src);
+        }
+        if !src.trim_ascii_start().starts_with(b"{") {
+            // (a .glb that is not one, or text that is no JSON object)
+            let head = &src[..src.len().min(4)];
+            return Err(self.err(
+                Location::File,
+                ErrorKind::Invalid(format!(
+                    "not a glTF file: neither the GLB magic `glTF` nor a JSON object at the \
+                     start (first bytes {head:02x?})"
+                )),
+            ));
+        }
+        Ok((src, None))
+    }
+
     fn split_glb<'s>(&self, src: &'s [u8]) -> Result<(&'s [u8], Option<&'s [u8]>), ReadError> {
         let truncated =
             |what: &str| self.err(Location::File, ErrorKind::Truncated(what.to_owned()));
