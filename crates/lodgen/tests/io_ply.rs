@@ -327,3 +327,71 @@ fn truncations_and_corruptions_never_panic() {
         }
     }
 }
+
+/// Vertex colours (`red green blue`, optional `alpha`) become `COLOR_0` in
+/// [0, 1]: integers full-range, floats as they are; ascii and binary agree.
+#[test]
+fn vertex_colours_are_read() {
+    let head = |format: &str, ty: &str, alpha: bool| {
+        let a = if alpha {
+            format!("property {ty} alpha\n")
+        } else {
+            String::new()
+        };
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\nproperty {ty} red\nproperty {ty} green\nproperty {ty} blue\n{a}\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    let rgb = [[255.0, 0.0, 0.0], [0.0, 255.0, 51.0], [255.0, 255.0, 255.0]];
+    let want = vec![
+        [1.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.2, 1.0],
+        [1.0, 1.0, 1.0, 1.0],
+    ];
+    // ascii, uchar, no alpha
+    let mut text = head("ascii", "uchar", false);
+    for (i, c) in rgb.iter().enumerate() {
+        text += &format!("{i} {} 0 {} {} {}\n", i % 2, c[0], c[1], c[2]);
+    }
+    text += "3 0 1 2\n";
+    assert_eq!(prim(&ply(text.as_bytes())).colors, Some(want.clone()));
+    // binary, both endiannesses, through the record loop and the fast path
+    for big in [false, true] {
+        let format = if big {
+            "binary_big_endian"
+        } else {
+            "binary_little_endian"
+        };
+        let mut b = head(format, "uchar", false).into_bytes();
+        for (i, c) in rgb.iter().enumerate() {
+            for v in [i as f64, (i % 2) as f64, 0.0] {
+                put(&mut b, "float", v, big);
+            }
+            for &v in c {
+                put(&mut b, "uchar", v, big);
+            }
+        }
+        put(&mut b, "uchar", 3.0, big);
+        for v in [0.0, 1.0, 2.0] {
+            put(&mut b, "int", v, big);
+        }
+        assert_eq!(prim(&ply(&b)).colors, Some(want.clone()), "big {big}");
+    }
+    // float colours with alpha, as they are
+    let mut text = head("ascii", "float", true);
+    text += "0 0 0 0.5 0.25 1 0.5\n1 0 0 0 0 0 1\n0 1 0 1 1 1 0\n3 0 1 2\n";
+    assert_eq!(
+        prim(&ply(text.as_bytes())).colors,
+        Some(vec![
+            [0.5, 0.25, 1.0, 0.5],
+            [0.0, 0.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0, 0.0]
+        ])
+    );
+    // no colours: none
+    let mut text = head("ascii", "uchar", false).replace("property uchar red\n", "");
+    text += "0 0 0 0 0\n1 0 0 0 0\n0 1 0 0 0\n3 0 1 2\n";
+    assert_eq!(prim(&ply(text.as_bytes())).colors, None);
+}

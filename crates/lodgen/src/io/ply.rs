@@ -3,7 +3,9 @@
 //!
 //! Read: element `vertex` with `x y z`, optional `nx ny nz`, optional
 //! texture coordinates named `u v`, `s t`, `texture_u texture_v` or
-//! `texture_s texture_t`; element `face` with a list `vertex_indices` (or
+//! `texture_s texture_t`, optional colours `red green blue` (`alpha`;
+//! integers full-range, `uchar` 255 = 1, floats as they are: `COLOR_0`);
+//! element `face` with a list `vertex_indices` (or
 //! `vertex_index`) of any count and index type, polygons fan-triangulated;
 //! element `tristrips` with a list `vertex_indices` of strips separated by
 //! `-1`. Every other element and property is skipped (by size in binary
@@ -42,6 +44,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(cap);
     let mut normals: Vec<[f32; 3]> = Vec::new();
     let mut texcoords: Vec<[f32; 2]> = Vec::new();
+    let mut colors: Vec<[f32; 4]> = Vec::new();
     let mut indices: Vec<u32> = Vec::new();
     let mut list: Vec<f64> = Vec::new();
     let mut resolved: Vec<u32> = Vec::new();
@@ -54,6 +57,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         };
         let has_normals = roles.iter().any(|r| matches!(r, Role::Normal(_)));
         let has_uv = roles.iter().any(|r| matches!(r, Role::Uv(_)));
+        let has_colors = roles.iter().any(|r| matches!(r, Role::Color(_)));
         let index_list = index_list_of(element, path)?;
         if fast && encoding != Encoding::Ascii {
             // fixed-size vertices and face lists: the record loop without
@@ -70,6 +74,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                     positions: &mut positions,
                     normals: has_normals.then_some(&mut normals),
                     texcoords: has_uv.then_some(&mut texcoords),
+                    colors: has_colors.then_some(&mut colors),
                 };
                 body.pos += ply_binary::vertices(rest, element, &roles, big, path, out)?;
                 continue;
@@ -82,7 +87,8 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         }
         for index in 0..element.count {
             body.begin(&element.name, index)?;
-            let (p, n, uv) = read_record(&mut body, element, index, &roles, index_list, &mut list)?;
+            let (p, n, uv, c) =
+                read_record(&mut body, element, index, &roles, index_list, &mut list)?;
             body.end(&element.name, index)?;
             if element.name == "vertex" {
                 positions.push(finite3(p, &body, index, "vertex coordinate")?);
@@ -92,6 +98,11 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                 if has_uv {
                     let t = finite3([uv[0], uv[1], 0.0], &body, index, "texture coordinate")?;
                     texcoords.push([t[0], 1.0 - t[1]]);
+                }
+                if has_colors {
+                    let [r, g, b] = finite3([c[0], c[1], c[2]], &body, index, "colour")?;
+                    let [a, ..] = finite3([c[3], 0.0, 0.0], &body, index, "colour")?;
+                    colors.push([r, g, b, a]);
                 }
             } else if index_list.is_some() {
                 let at = (&body, element, index);
@@ -104,6 +115,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         material: None,
         normals: (!normals.is_empty()).then_some(normals),
         texcoords: (!texcoords.is_empty()).then_some(texcoords),
+        colors: (!colors.is_empty()).then_some(colors),
         positions,
         indices,
         ..Primitive::default()
@@ -146,7 +158,7 @@ fn index_list_of(element: &Element, path: &Path) -> Result<Option<usize>, ReadEr
 }
 
 /// A vertex record's position, normal and texture coordinate.
-type Record = ([f64; 3], [f64; 3], [f64; 2]);
+type Record = ([f64; 3], [f64; 3], [f64; 2], [f64; 4]);
 
 /// One record of `element`: its position, normal and texture coordinate
 /// (as `roles` assign them; zeros otherwise), and the index list (property
@@ -162,6 +174,7 @@ fn read_record(
     let mut p = [0.0f64; 3];
     let mut n = [0.0f64; 3];
     let mut uv = [0.0f64; 2];
+    let mut c = [0.0, 0.0, 0.0, 1.0f64];
     for (pi, prop) in element.props.iter().enumerate() {
         match prop.kind {
             Kind::Scalar(ty) => {
@@ -171,6 +184,7 @@ fn read_record(
                     Role::Position(k) => p[k] = value,
                     Role::Normal(k) => n[k] = value,
                     Role::Uv(k) => uv[k] = value,
+                    Role::Color(k) => c[k] = value * ty.color_scale(),
                 }
             }
             Kind::List { count, item } => {
@@ -194,7 +208,7 @@ fn read_record(
             }
         }
     }
-    Ok((p, n, uv))
+    Ok((p, n, uv, c))
 }
 
 /// Checks the index list of record `index` of a `face` (fanned) or
@@ -297,6 +311,17 @@ fn vertex_roles(element: &Element, path: &Path) -> Result<Vec<Role>, ReadError> 
             roles[a] = Role::Normal(0);
             roles[b] = Role::Normal(1);
             roles[c] = Role::Normal(2);
+        }
+    }
+    let rgb = [find("red"), find("green"), find("blue")];
+    if let [Some(r), Some(g), Some(b)] = rgb {
+        if scalar(r) && scalar(g) && scalar(b) {
+            roles[r] = Role::Color(0);
+            roles[g] = Role::Color(1);
+            roles[b] = Role::Color(2);
+            if let Some(a) = find("alpha").filter(|&a| scalar(a)) {
+                roles[a] = Role::Color(3);
+            }
         }
     }
     for (u, v) in [

@@ -15,6 +15,8 @@ pub(super) struct VertexArrays<'a> {
     pub positions: &'a mut Vec<[f32; 3]>,
     pub normals: Option<&'a mut Vec<[f32; 3]>>,
     pub texcoords: Option<&'a mut Vec<[f32; 2]>>,
+    /// RGBA in [0, 1] (alpha 1 when the file has none).
+    pub colors: Option<&'a mut Vec<[f32; 4]>>,
 }
 
 fn at(path: &Path, element: &Element, index: usize, kind: ErrorKind) -> ReadError {
@@ -77,6 +79,7 @@ pub(super) fn vertices(
         positions,
         mut normals,
         mut texcoords,
+        mut colors,
     } = out;
     positions.reserve(present);
     let le_f32_xyz = !big
@@ -99,12 +102,14 @@ pub(super) fn vertices(
             continue;
         }
         let (mut p, mut n, mut uv) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
+        let mut c = [0.0, 0.0, 0.0, 1.0f64];
         for &(offset, ty, role) in &fields {
             let value = decode(ty, big, &record[offset..]);
             match role {
                 Role::Position(k) => p[k] = value,
                 Role::Normal(k) => n[k] = value,
                 Role::Uv(k) => uv[k] = value,
+                Role::Color(k) => c[k] = value * ty.color_scale(),
                 Role::Skip => {}
             }
         }
@@ -115,6 +120,9 @@ pub(super) fn vertices(
         if let Some(texcoords) = texcoords.as_deref_mut() {
             let t = finite(uv, here, "texture coordinate")?;
             texcoords.push([t[0], 1.0 - t[1]]);
+        }
+        if let Some(colors) = colors.as_deref_mut() {
+            colors.push(finite(c, here, "colour")?);
         }
     }
     if present < element.count {

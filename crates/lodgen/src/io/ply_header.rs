@@ -18,6 +18,20 @@ pub(super) enum Scalar {
 }
 
 impl Scalar {
+    /// The factor that takes a colour component stored as this type to
+    /// [0, 1]: integers are full-range (`uchar` 255 = 1), floats as they are.
+    pub(super) fn color_scale(self) -> f64 {
+        match self {
+            Scalar::I8 => 1.0 / 127.0,
+            Scalar::U8 => 1.0 / 255.0,
+            Scalar::I16 => 1.0 / 32767.0,
+            Scalar::U16 => 1.0 / 65535.0,
+            Scalar::I32 => 1.0 / f64::from(i32::MAX),
+            Scalar::U32 => 1.0 / f64::from(u32::MAX),
+            Scalar::F32 | Scalar::F64 => 1.0,
+        }
+    }
+
     pub(super) fn parse(name: &str) -> Option<Scalar> {
         Some(match name {
             "char" | "int8" => Scalar::I8,
@@ -72,6 +86,8 @@ pub(super) enum Role {
     Position(usize),
     Normal(usize),
     Uv(usize),
+    /// `red green blue alpha`, component `k`.
+    Color(usize),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
