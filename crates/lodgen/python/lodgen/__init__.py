@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from dataclasses import dataclass
 from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -103,8 +104,20 @@ def _argv(options: dict) -> List[str]:
         if value is True:
             argv.append(flag)
         else:
-            argv += [flag, _flag_value(key, value)]
+            # one word, so that a value starting with "-" (levels=[-0.5],
+            # tau="-1") reaches the option's own check, not the parser as a flag
+            argv.append(f"{flag}={_flag_value(key, value)}")
     return argv
+
+
+def _count(value: Any, what: str) -> int:
+    """``value`` as a count for the native module: an integer, below 0 taken
+    as 0 and above ``sys.maxsize`` as ``sys.maxsize`` (counts are clamped)."""
+    try:
+        n = int(value)
+    except (TypeError, ValueError, OverflowError):
+        raise LodgenError(f"{what} must be an integer, not {value!r}") from None
+    return min(max(n, 0), sys.maxsize)
 
 
 def _mesh_arrays(vertices: Any, faces: Any = None) -> Tuple[np.ndarray, np.ndarray, np.dtype]:
@@ -127,6 +140,14 @@ def _mesh_arrays(vertices: Any, faces: Any = None) -> Tuple[np.ndarray, np.ndarr
         raise LodgenError(f"vertices must be numbers, not {v.dtype}")
     if f.size and not np.issubdtype(f.dtype, np.integer):
         raise LodgenError(f"faces must be integer vertex indices, not {f.dtype}")
+    if v.dtype.kind == "f" and v.dtype.itemsize > 4 and v.size:
+        big = np.abs(v) > np.finfo(np.float32).max
+        if big.any():
+            i = int(np.argwhere(big)[0][0])
+            raise LodgenError(
+                f"vertex {i} has a coordinate beyond float32's range {v[i].tolist()} "
+                "(lodgen computes in float32)"
+            )
     return (
         np.ascontiguousarray(v, dtype=np.float32),
         np.ascontiguousarray(f, dtype=np.int64),
@@ -216,6 +237,13 @@ class ProgressiveMesh:
     ) -> None:
         if _native is None:
             v, f, _ = _mesh_arrays(vertices, faces)
+            if target_triangles is not None:
+                t = _count(target_triangles, "target_triangles")
+                if int(target_triangles) < 0:
+                    raise LodgenError(
+                        f"target_triangles must be a triangle count, not {target_triangles!r}"
+                    )
+                target_triangles = t
             _native = _lodgen.progressive(v, f, _argv(options), target_triangles)
         self._pm = _native
 
@@ -243,11 +271,12 @@ class ProgressiveMesh:
     def mesh_at(self, triangles: int) -> Tuple[np.ndarray, np.ndarray]:
         """The finest mesh of the sequence with at most ``triangles``
         triangles (the base mesh if it has more): (vertices, faces)."""
-        return self._pm.mesh_at_splits(self._pm.splits_for_triangles(int(triangles)))
+        k = self._pm.splits_for_triangles(_count(triangles, "triangles"))
+        return self._pm.mesh_at_splits(k)
 
     def mesh_at_splits(self, k: int) -> Tuple[np.ndarray, np.ndarray]:
-        """The mesh after ``k`` splits (clamped to ``len(self)``)."""
-        return self._pm.mesh_at_splits(int(k))
+        """The mesh after ``k`` splits (clamped to ``[0, len(self)]``)."""
+        return self._pm.mesh_at_splits(_count(k, "k"))
 
     @property
     def mesh(self) -> Tuple[np.ndarray, np.ndarray]:
@@ -255,16 +284,18 @@ class ProgressiveMesh:
         return self._pm.mesh()
 
     def refine(self, n: int = 1) -> int:
-        """Apply up to ``n`` more splits at the cursor; returns how many."""
-        return self._pm.refine(int(n))
+        """Apply up to ``n`` more splits at the cursor (none for ``n <= 0``);
+        returns how many."""
+        return self._pm.refine(_count(n, "n"))
 
     def coarsen(self, n: int = 1) -> int:
-        """Undo up to ``n`` splits at the cursor; returns how many."""
-        return self._pm.coarsen(int(n))
+        """Undo up to ``n`` splits at the cursor (none for ``n <= 0``);
+        returns how many."""
+        return self._pm.coarsen(_count(n, "n"))
 
     def seek(self, k: int) -> None:
-        """Move the cursor to exactly ``k`` splits (clamped)."""
-        self._pm.seek(int(k))
+        """Move the cursor to exactly ``k`` splits (clamped to ``[0, len(self)]``)."""
+        self._pm.seek(_count(k, "k"))
 
     @property
     def splits(self) -> np.ndarray:

@@ -186,6 +186,37 @@ def test_bad_input_raises_with_the_commands_message(tmp_path, lodgen_bin):
     assert not (tmp_path / "b.glb").exists()
 
 
+def test_out_of_range_numbers_raise_lodgen_errors_or_clamp_as_documented():
+    v, f = torus(n=12, m=6)
+    # a negative option value reaches the option's own check (as "--levels=-0.5")
+    with pytest.raises(lodgen.LodgenError, match=r"--levels: .*must be in \(0, 1\]"):
+        lodgen.simplify(v, f, levels=[-0.5])
+    with pytest.raises(lodgen.LodgenError, match=r"--tau: .*non-negative"):
+        lodgen.simplify(v, f, tau="-1")
+    # float64 coordinates float32 cannot hold: said so, not "non-finite"
+    with pytest.raises(lodgen.LodgenError, match=r"vertex 0 .*float32"):
+        lodgen.simplify(v * 1e300, f)
+    with pytest.raises(lodgen.LodgenError, match=r"target_triangles"):
+        lodgen.ProgressiveMesh(v, f, target_triangles=-1)
+    pm = lodgen.ProgressiveMesh(v, f, target_triangles=20)
+    n = len(pm)
+    assert n > 0
+    # counts are clamped to [0, len(pm)], as the docstrings say
+    pm.seek(-5)
+    assert pm.applied == 0
+    pm.seek(10**30)
+    assert pm.applied == n
+    assert pm.refine(-3) == 0 and pm.coarsen(-3) == 0
+    assert pm.coarsen(10**30) == n
+    for got, want in [(pm.mesh_at_splits(-1), pm.mesh_at_splits(0)),
+                      (pm.mesh_at_splits(10**30), pm.mesh_at_splits(n)),
+                      (pm.mesh_at(-1), pm.mesh_at_splits(0))]:
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
+    with pytest.raises(lodgen.LodgenError, match=r"integer"):
+        pm.seek("three")
+
+
 def test_the_gil_is_released_during_a_long_simplify():
     v, f = torus(n=400, m=200)  # 160k triangles
     ticks = [0]
