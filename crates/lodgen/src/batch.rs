@@ -21,6 +21,7 @@ use clap::Args;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -49,7 +50,8 @@ pub struct BatchFlags {
     #[arg(short = 'j', long, value_name = "N", default_value_t = 1)]
     pub jobs: usize,
 
-    /// Batch mode: rebuild every file, even unchanged ones.
+    /// Batch mode: rebuild every file, even unchanged ones. Off by default
+    /// (files whose input and options match the manifest are skipped).
     #[arg(long)]
     pub force: bool,
 }
@@ -308,6 +310,9 @@ pub struct FileOutcome {
 pub struct BatchOutcome {
     pub files: Vec<FileOutcome>,
     pub seconds: f64,
+    /// Why the manifest could not be written (the outputs were; a re-run
+    /// rebuilds them): the command still prints the table and the report.
+    pub manifest_error: Option<String>,
 }
 
 impl BatchOutcome {
@@ -481,10 +486,7 @@ fn per_level_triangles(meshes: &[serde_json::Value]) -> Vec<u64> {
 
 /// The error chain of `e` on one line, as the CLI prints it.
 fn message(e: &anyhow::Error) -> String {
-    e.chain()
-        .map(|c| c.to_string())
-        .collect::<Vec<_>>()
-        .join(": ")
+    cli::error_line(e)
 }
 
 /// Threads each job's rayon pool gets with `jobs` jobs.
@@ -513,6 +515,23 @@ pub fn run_batch(
     inputs: &[BatchInput],
     out_dir: &Path,
     args: &BuildArgs,
+    on_done: &(dyn Fn(usize, &FileOutcome) + Sync),
+) -> Result<BatchOutcome> {
+    let outcome = run_batch_watched(inputs, out_dir, args, &|_| {}, on_done)?;
+    if let Some(e) = &outcome.manifest_error {
+        bail!("{e}");
+    }
+    Ok(outcome)
+}
+
+/// [`run_batch`], with `on_start` called as each file begins (from worker
+/// threads); a manifest that cannot be written is not an error here but
+/// [`BatchOutcome::manifest_error`] ([`run_batch`] returns it as one).
+pub fn run_batch_watched(
+    inputs: &[BatchInput],
+    out_dir: &Path,
+    args: &BuildArgs,
+    on_start: &(dyn Fn(&BatchInput) + Sync),
     on_done: &(dyn Fn(usize, &FileOutcome) + Sync),
 ) -> Result<BatchOutcome> {
     let t0 = Instant::now();
@@ -550,6 +569,7 @@ pub fn run_batch(
                 return Ok(());
             };
             let item = &inputs[k];
+            on_start(item);
             let outcome = pool.install(|| one_file(item, out_dir, args, &manifest, &options_hash));
             on_done(done.fetch_add(1, Ordering::Relaxed) + 1, &outcome);
             results.lock().unwrap_or_else(|p| p.into_inner())[k] = Some(outcome);
@@ -587,12 +607,18 @@ pub fn run_batch(
             _ => {}
         }
     }
-    if next_manifest != manifest {
-        next_manifest.save(out_dir)?;
-    }
+    let manifest_error = if next_manifest != manifest {
+        next_manifest
+            .save(out_dir)
+            .err()
+            .map(|e| cli::error_line(&e))
+    } else {
+        None
+    };
     Ok(BatchOutcome {
         files,
         seconds: t0.elapsed().as_secs_f64(),
+        manifest_error,
     })
 }
 
@@ -695,6 +721,14 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
     let inputs = expand_inputs(&args.inputs, Some(out_dir))?;
     let total = inputs.len();
     let quiet = args.quiet;
+    // on a terminal, a line saying which files are being built
+    let line = (!quiet && std::io::stderr().is_terminal()).then(|| cli::BatchProgress::new(total));
+    let line = line.as_ref();
+    let on_start = |i: &BatchInput| {
+        if let Some(l) = line {
+            l.start(&i.input);
+        }
+    };
     let on_done = move |n: usize, f: &FileOutcome| {
         if !quiet || matches!(f.status, Status::Failed(_)) {
             let status = match &f.status {
@@ -702,14 +736,22 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
                 Status::Skipped => "unchanged".to_string(),
                 Status::Failed(e) => format!("FAILED: {e}"),
             };
-            eprintln!(
+            let text = format!(
                 "[{n}/{total}] {} ({:.2} s) {status}",
                 f.input.display(),
                 f.seconds
             );
+            match line {
+                Some(l) => l.done(&f.input, &text),
+                None => eprintln!("{text}"),
+            }
         }
     };
-    let outcome = run_batch(&inputs, out_dir, args, &on_done)?;
+    let outcome = run_batch_watched(&inputs, out_dir, args, &on_start, &on_done);
+    if let Some(l) = line {
+        l.finish();
+    }
+    let outcome = outcome?;
     if !args.quiet {
         print!("{}", outcome.table());
     }
@@ -719,6 +761,12 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
             serde_json::to_string_pretty(&outcome.report_json())?.as_bytes(),
         )
         .with_context(|| format!("writing the report {}", path.display()))?;
+    }
+    if let Some(e) = &outcome.manifest_error {
+        if outcome.failed() == 0 {
+            bail!("{e}");
+        }
+        eprintln!("error: {e}");
     }
     if outcome.failed() > 0 {
         bail!(

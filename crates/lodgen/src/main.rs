@@ -110,8 +110,10 @@ fn main() -> ExitCode {
         // written, with warnings
         Ok(_) => ExitCode::from(3),
         Err(e) => {
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
+            let parts = cli::error_parts(&e);
+            let mut parts = parts.iter();
+            eprintln!("error: {}", parts.next().map_or("", |p| p.as_str()));
+            for cause in parts {
                 eprintln!("  caused by: {cause}");
             }
             ExitCode::FAILURE

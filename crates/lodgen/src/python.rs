@@ -45,17 +45,10 @@ fn parse(argv: Vec<String>) -> PyResult<BuildArgs> {
     })
 }
 
-/// The CLI's error chain on one line; a cause whose text its parent
-/// already ends with is left out.
+/// The CLI's error chain on one line, without repeats
+/// ([`crate::cli::error_line`]).
 fn error(e: anyhow::Error) -> PyErr {
-    let mut parts: Vec<String> = Vec::new();
-    for c in e.chain() {
-        let text = c.to_string();
-        if !parts.last().is_some_and(|p| p.ends_with(&text)) {
-            parts.push(text);
-        }
-    }
-    LodgenError::new_err(parts.join(": "))
+    LodgenError::new_err(crate::cli::error_line(&e))
 }
 
 type Arrays<'py> = (

@@ -135,7 +135,7 @@ fn a_directory_with_a_broken_file_builds_the_others_and_fails() {
         .find(|l| l.contains("in/parts/broken.obj:4:"))
         .unwrap()
         .trim()
-        .trim_start_matches("caused by: ")
+        .trim_start_matches("error: ")
         .to_string();
     assert!(
         stdout.contains(&line),
@@ -401,4 +401,30 @@ fn a_changed_companion_file_rebuilds_its_input() {
     changed[0] ^= 1;
     std::fs::write(bin, &changed).unwrap();
     assert_eq!(run("r5.json"), (1, 1), "a changed .bin rebuilds its .gltf");
+}
+
+/// An output directory where the manifest cannot be written (here: a
+/// directory in its place) still gets the table and the report, then the
+/// error, and a non-zero exit code.
+#[test]
+fn a_manifest_that_cannot_be_written_keeps_the_table_and_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    let dir = root.join("in");
+    std::fs::create_dir_all(&dir).unwrap();
+    let torus = lodgen_pm::shapes::torus(1.0, 0.35, 24, 12);
+    std::fs::write(dir.join("torus.obj"), obj_text(&torus)).unwrap();
+    std::fs::create_dir_all(root.join("out/.lodgen-manifest.json/x")).unwrap();
+    let o = lodgen(&["in", "--out-dir", "out", "--report", "r.json"], root);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("error: writing the manifest"), "{stderr}");
+    assert!(stdout.contains("1 built"), "the table: {stdout}");
+    let r = read_report(&root.join("r.json"));
+    assert_eq!(
+        statuses(&r),
+        [("in/torus.obj".to_string(), "built".to_string())]
+    );
+    assert!(root.join("out/torus.glb").is_file());
 }

@@ -201,6 +201,107 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
     }
 }
 
+/// An output path lodgen cannot write is refused before the input is read
+/// (a long build would otherwise be thrown away at its end): here the input
+/// is broken too, and the error is about the output.
+#[test]
+fn a_bad_output_path_is_refused_before_the_work() {
+    let d = tmp("output-first");
+    let bad = d.join("bad.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nf 0 1 2\n").unwrap();
+    for (output, says) in [
+        (
+            d.join("x.obj"),
+            "output file name must end in .glb or .gltf",
+        ),
+        (d.join("no/such/dir/x.glb"), "does not exist"),
+    ] {
+        let o = lodgen(&[bad.to_str().unwrap(), "-o", output.to_str().unwrap()]);
+        assert!(!o.status.success());
+        let err = stderr(&o);
+        assert!(err.starts_with("error: writing "), "{err}");
+        assert!(err.contains(says), "{err}");
+        assert!(
+            !err.contains("bad.obj:3"),
+            "read before the output was checked: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A negative number after an option is its value, so the option's own
+/// check explains what is wrong (not clap's "unexpected argument '-0'").
+#[test]
+fn a_negative_value_reaches_its_options_check() {
+    let d = tmp("negative");
+    let good = d.join("t.obj");
+    write_torus_obj(&good);
+    for (flag, value, says) in [
+        ("--levels", "-0.5", "must be in (0, 1]"),
+        ("--max-error", "-1%", "non-negative"),
+        ("--tau", "-1", "non-negative"),
+        ("--boundary-weight", "-1", "non-negative"),
+        ("--samples", "-2", "positive"),
+    ] {
+        let o = lodgen(&[good.to_str().unwrap(), flag, value, "-q"]);
+        assert!(!o.status.success(), "{flag} {value} accepted");
+        let err = stderr(&o);
+        assert!(
+            err.contains(flag) && err.contains(says),
+            "{flag} {value}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Each error names the file and place once: the command's `reading FILE`
+/// and the reader's `FILE:LINE: what` make one line, and an I/O error
+/// already in its parent's text is not repeated as a cause (batch mode's
+/// one-line messages likewise).
+#[test]
+fn errors_say_the_file_and_the_cause_once() {
+    let d = tmp("errors-once");
+    let bad = d.join("bad.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nf 0 1 2\n").unwrap();
+    let o = lodgen(&[
+        bad.to_str().unwrap(),
+        "-o",
+        d.join("bad.glb").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    let first = err.lines().next().unwrap_or_default();
+    assert!(
+        first.starts_with(&format!("error: reading {}:3: ", bad.display())),
+        "{err}"
+    );
+    assert_eq!(err.matches("bad.obj").count(), 1, "{err}");
+
+    // an output path that is a directory: the rename fails
+    let good = d.join("t.obj");
+    write_torus_obj(&good);
+    let taken = d.join("taken.glb");
+    std::fs::create_dir_all(&taken).unwrap();
+    let o = lodgen(&[good.to_str().unwrap(), "-o", taken.to_str().unwrap(), "-q"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.starts_with("error: writing "), "{err}");
+    assert_eq!(err.matches("taken.glb").count(), 1, "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+
+    // batch mode: the report's and the table's message
+    std::fs::create_dir_all(d.join("in")).unwrap();
+    std::fs::write(d.join("in/empty.obj"), "").unwrap();
+    let o = support::lodgen_in(&["in", "--out-dir", "out", "--report", "r.json", "-q"], &d);
+    assert!(!o.status.success());
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("r.json")).unwrap()).unwrap();
+    assert_eq!(
+        r["files"][0]["error"],
+        "reading in/empty.obj: no triangles in the file"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 #[test]
 fn help_explains_every_flag() {
     let o = lodgen(&["--help"]);
@@ -228,6 +329,43 @@ fn help_explains_every_flag() {
         assert!(h.contains(flag), "--help lacks {flag}");
     }
     assert!(h.contains("[default: 50%,10%,2%]"));
+    // every option says its default (a switch: "Off by default" or what
+    // happens without it), but those with nothing to default to
+    let exempt = [
+        "--help",
+        "--version",
+        "--out-dir",
+        "--report",
+        "--quiet",
+        "--verbose",
+        "--max-error",
+        "--strict",
+    ];
+    let mut entries: Vec<(String, String)> = Vec::new();
+    for line in h.lines() {
+        let t = line.trim_start();
+        let indent = line.len() - t.len();
+        if t.starts_with('-') && (2..=6).contains(&indent) {
+            let name = t
+                .split([' ', ','])
+                .find(|w| w.starts_with("--"))
+                .unwrap_or(t)
+                .to_string();
+            entries.push((name, String::new()));
+        } else if let Some(e) = entries.last_mut() {
+            e.1 += line;
+            e.1 += "\n";
+        }
+    }
+    assert!(entries.len() > 30, "{} options in --help", entries.len());
+    for (name, text) in &entries {
+        if !exempt.contains(&name.as_str()) {
+            assert!(
+                text.to_lowercase().contains("default"),
+                "--help of {name} does not say its default:\n{text}"
+            );
+        }
+    }
 }
 
 #[test]

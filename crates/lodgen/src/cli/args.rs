@@ -41,20 +41,26 @@ pub struct BuildArgs {
         long,
         value_name = "LIST",
         default_value = "50%,10%,2%",
-        conflicts_with = "max_error"
+        conflicts_with = "max_error",
+        allow_hyphen_values = true
     )]
     pub levels: String,
 
     /// Build levels by measured error instead: for each bound (in % of the
     /// bounding-box diagonal, e.g. "0.1%,0.5%,2%") the coarsest level whose
     /// measured symmetric Hausdorff distance stays within it.
-    #[arg(long, value_name = "LIST")]
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub max_error: Option<String>,
 
     /// Pair threshold τ: vertices closer than this may merge even without
     /// an edge (joins separate parts). In mesh units ("0.01") or in % of the
     /// bounding-box diagonal ("0.5%"). 0 = edge collapses only.
-    #[arg(long, value_name = "DIST", default_value = "0")]
+    #[arg(
+        long,
+        value_name = "DIST",
+        default_value = "0",
+        allow_hyphen_values = true
+    )]
     pub tau: String,
 
     /// How open borders are kept: "weighted" adds constraint planes (border
@@ -78,7 +84,12 @@ pub struct BuildArgs {
 
     /// Weight of the border constraint planes relative to the face planes
     /// (with --boundary weighted; scaled by edge length²).
-    #[arg(long, value_name = "W", default_value_t = DEFAULT_BOUNDARY_WEIGHT)]
+    #[arg(
+        long,
+        value_name = "W",
+        default_value_t = DEFAULT_BOUNDARY_WEIGHT,
+        allow_negative_numbers = true
+    )]
     pub boundary_weight: f64,
 
     /// Where a merged pair's vertex goes: "optimal" solves the quadric,
@@ -185,15 +196,16 @@ pub struct BuildArgs {
     pub k_ring: usize,
 
     /// Weight w of the curvature term in --method qem-curvature.
-    #[arg(long, value_name = "W", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.hybrid_weight)]
+    #[arg(long, value_name = "W", default_value_t = lodgen_pm::AdaptiveOptions::DEFAULT.hybrid_weight, allow_negative_numbers = true)]
     pub curvature_weight: f64,
 
-    /// Weight every face plane equally instead of by triangle area.
+    /// Weight every face plane equally instead of by triangle area. Off by
+    /// default.
     #[arg(long)]
     pub uniform_weights: bool,
 
     /// Write quantized vertex data (KHR_mesh_quantization): 16-bit
-    /// positions, 8-bit normals, 16-bit UVs.
+    /// positions, 8-bit normals, 16-bit UVs. Off by default (32-bit floats).
     #[arg(long)]
     pub quantize: bool,
 
@@ -218,7 +230,7 @@ pub struct BuildArgs {
     /// the square root (N·√(2,048·t)). Every vertex, the centroids of a
     /// coarse level and a search from the farthest points add to the
     /// maximum.
-    #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle)]
+    #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle, allow_negative_numbers = true)]
     pub samples: f64,
 
     /// Measure each level's error against the input (`on`: Metro-style sampling,

@@ -71,6 +71,17 @@ pub fn build_file_metered(
     if output == input {
         bail!("the output {} would overwrite the input", output.display());
     }
+    // (before the work, which a bad output path would throw away)
+    gltf_out::check_output_path(output).with_context(|| format!("writing {}", output.display()))?;
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            bail!(
+                "writing {}: the directory {} does not exist",
+                output.display(),
+                dir.display()
+            );
+        }
+    }
     on_progress(Progress::Reading);
     let t_read = Instant::now();
     let read_opts = io::ReadOptions {

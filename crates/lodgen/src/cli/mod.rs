@@ -10,9 +10,11 @@
 //! `args` (clap arguments → options) → `job` (`build_file`: read → LODs →
 //! write, timed) → `output` (tables, `--report`), `progress` (the progress
 //! line: build events and the simplification's `Meter`, polled); `measure`
-//! (`lodgen measure`), `golden` (golden summaries).
+//! (`lodgen measure`), `golden` (golden summaries), `errors` (an error's
+//! cause chain without repeats, as every front end shows it).
 
 mod args;
+mod errors;
 mod golden;
 pub(crate) mod job;
 mod measure;
@@ -23,7 +25,9 @@ pub use args::{
     default_output, parse_attribute_weights, parse_levels, parse_max_errors, parse_tau,
     BoundaryMode, BuildArgs, CompressMode, MeasureMode, PlacementMode, ScheduleMode,
 };
+pub use errors::{error_line, error_parts};
 pub use golden::golden_summary;
 pub use job::{build_file, build_file_metered, BuiltFile, FileTimes};
 pub use measure::{measure_files, measure_report, merged_mesh};
 pub use output::{build, stop_note, table, write_atomically};
+pub use progress::BatchProgress;

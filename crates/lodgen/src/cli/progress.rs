@@ -1,9 +1,10 @@
 //! The progress line on a terminal (stderr): the phase (reading, welding,
 //! simplifying with the share of the target reached, measuring level by
 //! level, writing) and, once it can be estimated, the time left in the
-//! phase. Nothing is shown on a pipe or with `-q` (the caller decides).
+//! phase; in batch mode, how many files are done and which are being
+//! built. Nothing is shown on a pipe or with `-q` (the caller decides).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -107,6 +108,63 @@ impl Spinner {
     }
 }
 
+/// Batch mode's line on a terminal: how many files are done and which are
+/// being built, each finished file's line printed above it.
+pub struct BatchProgress {
+    bar: ProgressBar,
+    total: usize,
+    /// Files done, and the files being built.
+    state: Mutex<(usize, Vec<PathBuf>)>,
+}
+
+impl BatchProgress {
+    pub fn new(total: usize) -> BatchProgress {
+        let bar = ProgressBar::new_spinner();
+        if let Ok(style) = ProgressStyle::with_template("{spinner} {elapsed:>3} {msg}") {
+            bar.set_style(style);
+        }
+        bar.enable_steady_tick(Duration::from_millis(120));
+        bar.set_message(batch_line(0, total, &[]));
+        BatchProgress {
+            bar,
+            total,
+            state: Mutex::new((0, Vec::new())),
+        }
+    }
+
+    /// A file's build begins.
+    pub fn start(&self, input: &Path) {
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        state.1.push(input.to_path_buf());
+        self.bar
+            .set_message(batch_line(state.0, self.total, &state.1));
+    }
+
+    /// A file is done: `line` goes above the progress line.
+    pub fn done(&self, input: &Path, line: &str) {
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        state.1.retain(|p| p != input);
+        state.0 += 1;
+        self.bar.println(line);
+        self.bar
+            .set_message(batch_line(state.0, self.total, &state.1));
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+/// `"3 of 22 files done; building a.obj, b.obj"`.
+fn batch_line(done: usize, total: usize, building: &[PathBuf]) -> String {
+    let mut line = format!("{done} of {total} files done");
+    if !building.is_empty() {
+        let names: Vec<String> = building.iter().map(|p| p.display().to_string()).collect();
+        line += &format!("; building {}", names.join(", "));
+    }
+    line
+}
+
 /// `", about N s left"` once a share `done` of a phase took `elapsed`
 /// (nothing before 5 % or one second: too early to say).
 fn left(elapsed: Duration, done: f64) -> String {
@@ -119,8 +177,22 @@ fn left(elapsed: Duration, done: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::left;
+    use super::{batch_line, left};
+    use std::path::PathBuf;
     use std::time::Duration;
+
+    #[test]
+    fn the_batch_line_names_the_files_being_built() {
+        assert_eq!(batch_line(0, 22, &[]), "0 of 22 files done");
+        let building = [
+            PathBuf::from("in/a b.obj"),
+            PathBuf::from("big/bunny-1m.obj"),
+        ];
+        assert_eq!(
+            batch_line(3, 22, &building),
+            "3 of 22 files done; building in/a b.obj, big/bunny-1m.obj"
+        );
+    }
 
     #[test]
     fn time_left_is_proportional_and_silent_early() {

@@ -113,6 +113,23 @@ pub fn write_lods_with(
     write_lods_prepared(path, scene, lods, opts, strict, None)
 }
 
+/// Whether `path` names an output lodgen writes: `.glb` or `.gltf` (any
+/// case), else [`WriteError::UnknownFormat`] (the command checks it before
+/// any work).
+pub fn check_output_path(path: &Path) -> Result<(), WriteError> {
+    output_format(path).map(|_| ())
+}
+
+fn output_format(path: &Path) -> Result<Format, WriteError> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("glb") => Ok(Format::Glb),
+        Some(e) if e.eq_ignore_ascii_case("gltf") => Ok(Format::Gltf),
+        _ => Err(WriteError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
 /// [`write_lods_with`], taking the levels `ready` holds (prepared while the
 /// build went on, [`PreparedLevels`]) instead of preparing them again: the
 /// same bytes.
@@ -124,15 +141,7 @@ pub fn write_lods_prepared(
     strict: bool,
     ready: Option<&PreparedLevels>,
 ) -> Result<WriteSummary, WriteError> {
-    let format = match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("glb") => Format::Glb,
-        Some(e) if e.eq_ignore_ascii_case("gltf") => Format::Gltf,
-        _ => {
-            return Err(WriteError::UnknownFormat {
-                path: path.to_path_buf(),
-            })
-        }
-    };
+    let format = output_format(path)?;
     let mut chains = prepare_chains(scene, lods, material_count(scene), ready)?;
     let mut warnings = Vec::new();
     if let Origin::Gltf { json, .. } = &scene.origin {
