@@ -16,8 +16,10 @@
 //! order is the unlifted run's but for the few contractions that test
 //! refuses. What the log records is a pure function of the
 //! vertex's quadric and working position, which do not change until the
-//! vertex is contracted again: so the lifted point is not stored but
-//! recomputed where the log takes it ([`Simplifier::logged_position`]) —
+//! vertex is contracted again: so the lifted point is computed once, when
+//! the contraction into the vertex decides its bit, and kept with the bit
+//! ([`Lifted`]; recomputed where a copied bit came without it), and read
+//! where the log takes it ([`Simplifier::logged_position`]) —
 //! as `v1`'s position before its next contraction (the record's `p1`), as a
 //! removed vertex's last position (written over its working one when it
 //! dies: nothing reads a dead vertex's position), and as a base vertex's
@@ -46,20 +48,34 @@ use super::legality::{DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 use super::{dv, fv, Placement, Simplifier};
 use crate::mesh::adjacency::FanLookup;
 use glam::DVec3;
+// (a map that is never iterated, with a fixed hasher: the order the
+// disallowed-types rule guards against never reaches the output)
+#[allow(clippy::disallowed_types)]
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// One bit per vertex: its position is logged lifted. Empty when the lift
-/// is off.
+/// is off. With it, the lifted point of each vertex whose bit
+/// [`Lifted::set_at`] set, kept in a map (few vertices are lifted at a
+/// time, so the map costs no memory per vertex): a vertex's lifted point is
+/// computed once per contraction into it, not at every read (the legality
+/// tests read the neighbours' ~10 times a contraction). [`Lifted::set`]
+/// forgets the point (it is recomputed where read).
 #[derive(Clone, Debug, Default)]
-pub(super) struct Lifted(Vec<u64>);
+pub(super) struct Lifted(Vec<u64>, Points);
+
+/// The lifted points by vertex (looked up, never iterated).
+#[allow(clippy::disallowed_types)]
+type Points = HashMap<u32, [f32; 3], BuildHasherDefault<VertexHash>>;
 
 impl Lifted {
     /// `n` vertices, none lifted; no bit at all when `on` is false.
     pub fn new(n: usize, on: bool) -> Lifted {
-        Lifted(if on {
-            vec![0; n.div_ceil(64)]
+        if on {
+            Lifted(vec![0; n.div_ceil(64)], Points::default())
         } else {
-            Vec::new()
-        })
+            Lifted::default()
+        }
     }
 
     /// The lift is on.
@@ -70,20 +86,79 @@ impl Lifted {
 
     #[inline]
     pub fn get(&self, v: u32) -> bool {
-        self.0
-            .get(v as usize / 64)
-            .is_some_and(|w| w >> (v % 64) & 1 != 0)
+        bit(&self.0, v)
+    }
+
+    /// `v`'s lifted point, when its bit is set and the point known.
+    #[inline]
+    fn point(&self, v: u32) -> Option<[f32; 3]> {
+        self.1.get(&v).copied()
     }
 
     #[inline]
     pub fn set(&mut self, v: u32, on: bool) {
-        if let Some(w) = self.0.get_mut(v as usize / 64) {
-            let m = 1u64 << (v % 64);
-            if on {
-                *w |= m;
-            } else {
-                *w &= !m;
+        set_bit(&mut self.0, v, on);
+        if !self.1.is_empty() {
+            self.1.remove(&v);
+        }
+    }
+
+    /// `v` lifted to `p` (`Some`), or not lifted.
+    #[inline]
+    fn set_at(&mut self, v: u32, p: Option<[f32; 3]>) {
+        set_bit(&mut self.0, v, p.is_some());
+        match p {
+            Some(p) => {
+                self.1.insert(v, p);
             }
+            None => {
+                if !self.1.is_empty() {
+                    self.1.remove(&v);
+                }
+            }
+        }
+    }
+}
+
+/// A vertex number's hash for [`Lifted`]'s map: one multiplication
+/// (Fibonacci hashing), enough for distinct `u32` keys.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct VertexHash(u64);
+
+impl Hasher for VertexHash {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+
+    #[inline]
+    fn write_u32(&mut self, v: u32) {
+        self.0 = u64::from(v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+#[inline]
+fn bit(words: &[u64], v: u32) -> bool {
+    words
+        .get(v as usize / 64)
+        .is_some_and(|w| w >> (v % 64) & 1 != 0)
+}
+
+#[inline]
+fn set_bit(words: &mut [u64], v: u32, on: bool) {
+    if let Some(w) = words.get_mut(v as usize / 64) {
+        let m = 1u64 << (v % 64);
+        if on {
+            *w |= m;
+        } else {
+            *w &= !m;
         }
     }
 }
@@ -96,6 +171,9 @@ impl Simplifier {
         let p = self.pos[v as usize];
         if !self.lifted.get(v) {
             return p;
+        }
+        if let Some(l) = self.lifted.point(v) {
+            return l;
         }
         self.quadric[v as usize].lifted(dv(p)).map_or(p, fv)
     }
@@ -136,26 +214,28 @@ impl Simplifier {
         }
         self.pos[v0 as usize] = logged[0];
         self.lifted.set(v0, false);
-        let on = liftable && self.lift_keeps_fan(v1, logged, own);
-        self.lifted.set(v1, on);
+        let at = if liftable {
+            self.lift_keeps_fan(v1, logged, own)
+        } else {
+            None
+        };
+        self.lifted.set_at(v1, at);
     }
 
-    /// `v1`'s lifted point differs from its working one and turns no face
+    /// `v1`'s lifted point (`Some`) if it differs from its working one and turns no face
     /// of its fan by more than [`FLIP_MIN_COS`] nor collapses one
     /// ([`DEGENERATE_AREA_RATIO_SQ`]): neither from its working point
     /// (neighbours at their working positions) nor from the face's last
     /// logged state (its corner at `logged[1]` for `v1`'s first `own`
     /// faces, at `logged[0]` for those that came from `v0`; neighbours at
     /// their logged positions), which is what the log's levels show.
-    fn lift_keeps_fan(&mut self, v1: u32, logged: [[f32; 3]; 2], own: usize) -> bool {
+    fn lift_keeps_fan(&mut self, v1: u32, logged: [[f32; 3]; 2], own: usize) -> Option<[f32; 3]> {
         let p = self.pos[v1 as usize];
-        let Some(l) = self.quadric[v1 as usize].lifted(dv(p)).map(fv) else {
-            return false;
-        };
-        if l == p {
-            return false;
+        let at = self.quadric[v1 as usize].lifted(dv(p)).map(fv)?;
+        if at == p {
+            return None;
         }
-        let (pm, l) = (dv(p), dv(l));
+        let (pm, l) = (dv(p), dv(at));
         for (k, &t) in self.vtris.fan(v1).iter().enumerate() {
             if !self.tri_alive[t as usize] {
                 continue;
@@ -169,11 +249,11 @@ impl Simplifier {
             let (b, c) = (dv(self.pos[b as usize]), dv(self.pos[c as usize]));
             if turn_ok(pm, l, b, c).is_err() || turn_ok(before, l, dv(lb), dv(lc)).is_err() {
                 self.stats.lift_refused += 1;
-                return false;
+                return None;
             }
         }
         self.stats.lifted += 1;
-        true
+        Some(at)
     }
 
     /// Every live vertex's working position replaced by its logged one,
