@@ -22,6 +22,12 @@ pub enum InspectError {
     },
     #[error("{}: not a GLB container: {reason}", .path.display())]
     Glb { path: PathBuf, reason: String },
+    #[error(
+        "{}: not a glTF file: neither the GLB magic `glTF` nor a JSON object at the start \
+         (`lodgen inspect` reads .gltf and .glb files; `lodgen measure` compares meshes of any format)",
+        .path.display()
+    )]
+    NotGltf { path: PathBuf },
     #[error("{}: invalid JSON: {source}", .path.display())]
     Json {
         path: PathBuf,
@@ -93,7 +99,14 @@ pub fn inspect(path: &Path) -> Result<InspectReport, InspectError> {
         })?;
         serde_json::from_slice(&glb.json)
     } else {
-        serde_json::from_slice(&bytes)
+        // (a UTF-8 byte order mark, as some editors write, before the JSON)
+        let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+        if text.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+            return Err(InspectError::NotGltf {
+                path: path.to_path_buf(),
+            });
+        }
+        serde_json::from_slice(text)
     }
     .map_err(|source| InspectError::Json {
         path: path.to_path_buf(),
@@ -385,5 +398,35 @@ impl fmt::Display for InspectReport {
             writeln!(f, "warning: {w}")?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("lodgen-inspect-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    #[test]
+    fn a_mesh_of_another_format_is_named_not_gltf_and_a_bom_reads() {
+        let obj = scratch("cube.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let e = inspect(&obj).unwrap_err();
+        assert!(matches!(e, InspectError::NotGltf { .. }), "{e}");
+        assert!(e.to_string().contains("not a glTF file"), "{e}");
+        let bom = scratch(
+            "bom.gltf",
+            b"\xEF\xBB\xBF {\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"name\":\"n\"}]}",
+        );
+        let r = inspect(&bom).unwrap();
+        assert!(r.chains.is_empty() && r.plain.is_empty(), "{r:?}");
+        let bad = scratch("bad.gltf", b"{\"asset\": ");
+        assert!(matches!(inspect(&bad), Err(InspectError::Json { .. })));
+        std::fs::remove_dir_all(obj.parent().unwrap()).unwrap();
     }
 }
