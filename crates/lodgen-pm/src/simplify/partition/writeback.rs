@@ -15,10 +15,8 @@ use crate::simplify::Simplifier;
 use rayon::prelude::*;
 
 /// Clusters written back at once: a batch's simplifiers are freed before
-/// the next batch is written (bunny-4m: 271 clusters of ~1.2 MB each;
-/// bunny-1m's peak on 2 threads, one run each: 181 MB with 16, 171 MB
-/// with 4, the one-at-a-time loop's 169–177 MB).
-const WRITE_BATCH: usize = 4;
+/// the next batch is written (bunny-4m: 271 clusters of ~1.2 MB each).
+const WRITE_BATCH: usize = 16;
 
 /// Parts the vertex range is cut into for a batch's writes (or the held
 /// vertices'): a few per core.
@@ -438,7 +436,7 @@ mod tests {
             .collect()
     }
 
-    /// A grid of 72 clusters (18 batches) to 1.5 %, with features and
+    /// A grid of 72 clusters (five batches) to 1.5 %, with features and
     /// one wedge per vertex, the corners' wedges stored or not.
     fn simplifier(stored: bool) -> (Simplifier, usize, f32) {
         let m = shapes::grid(120, 120, |x, y| 0.1 * (7.0 * x).sin() * (5.0 * y).cos());
