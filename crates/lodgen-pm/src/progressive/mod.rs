@@ -28,7 +28,6 @@
 pub mod attrfit;
 pub mod levels;
 mod log;
-mod numbering;
 mod split;
 #[allow(missing_docs)] // (documented by its owner, issue 15 stream work)
 pub mod stream;
@@ -41,7 +40,6 @@ pub(crate) use log::{Contraction, Log, Removed};
 
 use crate::mesh::Mesh;
 use crate::util::prefetch;
-use numbering::{MergedPositions, Numbering};
 use rayon::prelude::*;
 
 /// The whole sequence M_n … M_g: the base mesh plus the splits that refine it
@@ -112,7 +110,7 @@ impl ProgressiveMesh {
         };
         // the merged positions need the log in order; the rest of each
         // split only reads shared maps, so splits are built in parallel
-        let p_merged = MergedPositions::of(positions, records);
+        let p_merged = merged_positions(positions, records);
         // one wedge per vertex (no seam, no attribute): the per-split
         // edits follow from it and are not stored (wedgelog.rs)
         let per_vertex = match implied {
@@ -146,7 +144,7 @@ impl ProgressiveMesh {
             };
             let item = |k: usize| {
                 b.prefetch_ahead(k, n);
-                (&log.records[n - 1 - k], p_merged.get(k))
+                (&log.records[n - 1 - k], &p_merged[k])
             };
             if explicit {
                 let (s, w): (Vec<VertexSplit>, Vec<SplitWedges>) = (k0..k1)
@@ -442,6 +440,79 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// The refinement numbering of a log: the base mesh's live vertices and
+/// triangles in id order, then each split's vertex and restored triangles,
+/// newest contraction first.
+struct Numbering {
+    /// Simplifier vertex → refinement number.
+    vnew: Vec<u32>,
+    /// Simplifier triangle → refinement number.
+    tnew: Vec<u32>,
+    /// Refinement number → simplifier vertex.
+    vertex_origin: Vec<u32>,
+    /// Refinement number → simplifier triangle.
+    triangle_origin: Vec<u32>,
+    base_vertices: usize,
+    base_triangles: usize,
+}
+
+impl Numbering {
+    fn of(vertex_alive: &[bool], triangle_alive: &[bool], log: &Log) -> Numbering {
+        const NONE: u32 = u32::MAX;
+        let mut vnew = vec![NONE; vertex_alive.len()];
+        let mut tnew = vec![NONE; triangle_alive.len()];
+        let mut vertex_origin = Vec::with_capacity(vertex_alive.len());
+        let mut triangle_origin = Vec::with_capacity(triangle_alive.len());
+        for (v, &alive) in vertex_alive.iter().enumerate() {
+            if alive {
+                vnew[v] = vertex_origin.len() as u32;
+                vertex_origin.push(v as u32);
+            }
+        }
+        for (t, &alive) in triangle_alive.iter().enumerate() {
+            if alive {
+                tnew[t] = triangle_origin.len() as u32;
+                triangle_origin.push(t as u32);
+            }
+        }
+        let base_vertices = vertex_origin.len();
+        let base_triangles = triangle_origin.len();
+        for c in log.records.iter().rev() {
+            vnew[c.v0 as usize] = vertex_origin.len() as u32;
+            vertex_origin.push(c.v0);
+            for &t in log.removed(c) {
+                tnew[t as usize] = triangle_origin.len() as u32;
+                triangle_origin.push(t);
+            }
+        }
+        debug_assert!(vnew.iter().all(|&v| v != NONE));
+        Numbering {
+            vnew,
+            tnew,
+            vertex_origin,
+            triangle_origin,
+            base_vertices,
+            base_triangles,
+        }
+    }
+}
+
+/// The merged position of each split (newest contraction first): every
+/// vertex's position after the contraction being renumbered, walking the
+/// log backwards, where `v1` goes back to `p1`.
+fn merged_positions(positions: &[[f32; 3]], records: &[Contraction]) -> Vec<[f32; 3]> {
+    let mut current = positions.to_vec();
+    records
+        .iter()
+        .rev()
+        .map(|c| {
+            let p = current[c.v1 as usize];
+            current[c.v1 as usize] = c.p1;
+            p
+        })
+        .collect()
+}
+
 /// What building one vertex split reads (shared by the threads).
 struct SplitBuilder<'a> {
     positions: &'a [[f32; 3]],
@@ -459,7 +530,7 @@ impl SplitBuilder<'_> {
     fn build(
         &self,
         corners: &mut Vec<(Corner, [u32; 2])>,
-        (c, p_merged): (&Contraction, [f32; 3]),
+        (c, &p_merged): (&Contraction, &[f32; 3]),
     ) -> (VertexSplit, Option<SplitWedges>) {
         let (log, tracked) = (self.log, !self.log.wedges.is_empty());
         let map = |t: &[u32; 3]| t.map(|v| self.vnew[v as usize]);

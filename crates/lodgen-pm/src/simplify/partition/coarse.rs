@@ -36,19 +36,6 @@ impl Simplifier {
     /// vertices' state (the whole mesh's arrays stay: at 15 % of the input
     /// the copies are small) and are written back in place.
     pub(super) fn run_coarse(&mut self, size: usize, factor: f32) {
-        let Some(locals) = self.coarse_stage(size, factor) else {
-            return;
-        };
-        // (the coarse rounds count after the first stage's)
-        let passes = std::mem::take(&mut self.stats.passes);
-        let done = self.write_back(locals);
-        self.stats.passes += passes;
-        self.merged(done);
-    }
-
-    /// The coarse clusters simplified in rounds, ready to be written back
-    /// (`None` when the stage is left out).
-    pub(super) fn coarse_stage(&mut self, size: usize, factor: f32) -> Option<Vec<Local>> {
         let nt = self.tris.len();
         let size = size * GROUP;
         let stop = (KEEP_COARSE * nt as f64) as usize;
@@ -56,7 +43,7 @@ impl Simplifier {
             || self.target as f64 > KEEP_COARSE / 2.0 * nt as f64
             || self.live_tris <= stop
         {
-            return None;
+            return;
         }
         let home = self.homes(size);
         // (rebuilt at the end, as the first stage's)
@@ -69,7 +56,13 @@ impl Simplifier {
             .collect();
         drop(home);
         rounds(&mut locals, self.live_tris, self.target, stop, factor);
-        Some(locals)
+        // (the coarse rounds count after the first stage's)
+        let passes = std::mem::take(&mut self.stats.passes);
+        let done: Vec<_> = locals.into_iter().map(|l| self.write_back(l)).collect();
+        self.stats.passes += passes;
+        self.merge_logs(done);
+        let alive = &self.tri_alive;
+        self.vtris = Fans::new(self.pos.len(), &self.tris, |t| alive[t]);
     }
 
     /// Coarse cluster `c`: the live triangles of `c·size..`, its vertices'

@@ -50,7 +50,6 @@
 
 mod coarse;
 mod merge;
-mod writeback;
 
 use super::{Pass, Simplifier, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
@@ -102,9 +101,6 @@ const BATCH: usize = 16;
 /// The whole mesh's quadrics and positions in blocks of `BLOCK` vertices,
 /// each `None` once its last cluster is built.
 type Blocks<'a> = (&'a [Option<Vec<Quadric>>], &'a [Option<Vec<[f32; 3]>>]);
-
-/// A held vertex's quadric and position, put back after the first stage.
-type Held = (usize, Quadric, [f32; 3]);
 
 /// A cluster's triangles in the whole mesh's numbering.
 enum Tris {
@@ -179,18 +175,6 @@ impl Simplifier {
         let Schedule::Passes { factor } = self.opts.schedule else {
             return;
         };
-        let (locals, held) = self.first_stage(size, factor);
-        let done = self.write_back(locals);
-        self.restore_held(held);
-        self.merged(done);
-        self.run_coarse(size, factor);
-    }
-
-    /// The first stage's clusters of `size` triangles simplified in rounds,
-    /// the whole mesh's arrays left zeroed for their write-back, and the
-    /// held vertices' quadrics and positions (sorted by vertex), which the
-    /// write-back does not restore.
-    fn first_stage(&mut self, size: usize, factor: f32) -> (Vec<Local>, Vec<Held>) {
         let nt = self.tris.len();
         let home = self.homes(size);
         // (the clusters build their own fans: the whole mesh's are not
@@ -201,7 +185,7 @@ impl Simplifier {
         // vertices' quadrics and positions; the whole mesh's are rebuilt
         // from theirs.
         let nv = self.pos.len();
-        let held: Vec<Held> = (0..nv)
+        let held: Vec<(usize, Quadric, [f32; 3])> = (0..nv)
             .filter(|&v| home[v] == HELD)
             .map(|v| (v, self.quadric[v], self.pos[v]))
             .collect();
@@ -219,15 +203,18 @@ impl Simplifier {
         self.pos = vec![[0.0; 3]; nv];
         self.tris = vec![[0; 3]; nt];
         self.tri_alive = vec![false; nt];
-        (locals, held)
-    }
-
-    /// After a stage's write-back: its logs merged into the whole mesh's
-    /// and the fans rebuilt.
-    fn merged(&mut self, done: Vec<Done>) {
+        let mut done = Vec::with_capacity(locals.len());
+        for l in locals {
+            done.push(self.write_back(l));
+        }
+        for (v, q, p) in held {
+            self.quadric[v] = q;
+            self.pos[v] = p;
+        }
         self.merge_logs(done);
         let alive = &self.tri_alive;
-        self.vtris = Fans::new(self.pos.len(), &self.tris, |t| alive[t]);
+        self.vtris = Fans::new(nv, &self.tris, |t| alive[t]);
+        self.run_coarse(size, factor);
     }
 
     /// The clusters of `size` triangles, built a batch at a time from the
@@ -407,6 +394,55 @@ impl Simplifier {
             lifted,
         }
     }
+
+    /// Write a cluster's state back: its interior vertices and its own
+    /// triangles as they are now.
+    fn write_back(&mut self, l: Local) -> Done {
+        let Local {
+            verts,
+            tris: ids,
+            held,
+            rounds,
+            s,
+        } = l;
+        for (i, &g) in verts.iter().enumerate() {
+            let g = g as usize;
+            if !held[i] {
+                self.pos[g] = s.pos[i];
+                self.quadric[g] = s.quadric[i];
+                self.alive[g] = s.alive[i];
+                self.boundary[g] = s.boundary[i];
+                self.corner[g] = s.corner[i];
+                self.lifted.set(g as u32, s.lifted.get(i as u32));
+            }
+        }
+        for (t, tri) in s.tris.iter().enumerate() {
+            let g = ids.global(t as u32) as usize;
+            self.tris[g] = tri.map(|x| verts[x as usize]);
+            self.tri_alive[g] = s.tri_alive[t];
+        }
+        if let Some(f) = &mut self.features {
+            // one wedge per vertex: each corner's wedge is its vertex's
+            // (a dead triangle's as it died: its corners stay as they were)
+            if let (Some(w), Some(vw)) = (&mut f.wedges, &f.vertex_wedge) {
+                for t in 0..s.tris.len() as u32 {
+                    let g = ids.global(t) as usize;
+                    w[g] = self.tris[g].map(|v| vw[v as usize]);
+                }
+            }
+        }
+        self.live_tris -= s.tris.len() - s.live_tris;
+        self.stats.collapses += s.stats.collapses;
+        // (the clusters made the same rounds: count them once)
+        self.stats.passes = self.stats.passes.max(s.stats.passes);
+        add_rejections(&mut self.stats.rejected, &s.stats.rejected);
+        Done {
+            verts,
+            tris: ids,
+            rounds,
+            log: s.log,
+        }
+    }
 }
 
 /// Rounds over the clusters (`live` triangles in all, the whole mesh's
@@ -552,16 +588,6 @@ fn zero_quadrics(n: usize) -> Vec<Quadric> {
             std::alloc::handle_alloc_error(layout);
         }
         Vec::from_raw_parts(p, n, n)
-    }
-}
-
-#[cfg(test)]
-impl Simplifier {
-    /// The final state `finish` turns into the progressive mesh: working
-    /// positions, live vertices and triangles, and the log (for the tests
-    /// of the log's renumbering).
-    pub(crate) fn final_state(&self) -> (&[[f32; 3]], &[bool], &[bool], &Log) {
-        (&self.pos, &self.alive, &self.tri_alive, &self.log)
     }
 }
 
