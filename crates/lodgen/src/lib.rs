@@ -8,6 +8,7 @@ pub mod coverage;
 pub mod fuzz;
 pub mod gltf_out;
 pub mod inspect;
+pub mod interrupt;
 pub mod io;
 pub mod lod;
 pub mod progressive;

@@ -16,7 +16,8 @@ use std::process::ExitCode;
 /// Exit codes: 0 written; 1 error (nothing written); 2 bad arguments;
 /// 3 written, with warnings (a part of the input left out or written
 /// unsimplified, each printed as `warning: FILE: PLACE: what`; --strict
-/// makes them errors).
+/// makes them errors); 130 interrupted (Ctrl-C; 143 SIGTERM, 129 SIGHUP):
+/// unfinished outputs removed.
 ///
 /// Examples:
 ///   lodgen bunny.obj --levels 50%,10%,2% -o bunny.glb
@@ -83,6 +84,8 @@ struct MeasureArgs {
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
+    // (before any thread: Ctrl-C removes unfinished outputs, exit 130)
+    lodgen::interrupt::install();
     let cli = Cli::parse();
     // (after parsing, which starts no thread: the setting depends on the input's size)
     tune_allocator(&cli);

@@ -455,18 +455,10 @@ pub fn write_glb(root: &Value, bin: &[u8]) -> Result<Vec<u8>, ProgressiveError> 
 }
 
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ProgressiveError> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|source| {
-            let _ = std::fs::remove_file(&tmp);
-            ProgressiveError::Io {
-                path: path.to_path_buf(),
-                source,
-            }
-        })
+    crate::interrupt::write_atomically(path, &[bytes]).map_err(|source| ProgressiveError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// The byte ranges in buffer 0 of bufferView `v`'s data: its own and, with

@@ -2,7 +2,7 @@
 //! stop note, the `--report` JSON (with [`crate::summary`]'s additions) and
 //! its atomic write.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -249,14 +249,8 @@ fn report_json(
     })
 }
 
-/// Write `bytes` to a temporary file beside `path`, then rename.
+/// Write `bytes` to a temporary file beside `path`, then rename (removed
+/// on error or interrupt: [`crate::interrupt`]).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })
+    crate::interrupt::write_atomically(path, &[bytes])
 }

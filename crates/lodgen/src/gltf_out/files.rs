@@ -309,8 +309,10 @@ fn glb(json: &[u8], bin: Vec<Vec<u8>>, bin_len: usize) -> Result<Vec<Vec<u8>>, W
 
 /// Writes every file to a temporary name in its directory, then renames them
 /// (the main file, first in `files`, last). On error, removes whatever it
-/// created.
+/// created. Every file stays recorded as unfinished ([`crate::interrupt`])
+/// until the main file is in place, so an interrupt removes them all.
 pub(super) fn write_atomically(files: &[OutFile]) -> Result<(), WriteError> {
+    use crate::interrupt;
     let temp_of = |p: &Path| {
         let name = p
             .file_name()
@@ -319,16 +321,11 @@ pub(super) fn write_atomically(files: &[OutFile]) -> Result<(), WriteError> {
         p.with_file_name(format!(".{name}.{}.lodgen-tmp", std::process::id()))
     };
     let mut temps: Vec<PathBuf> = Vec::with_capacity(files.len());
-    let cleanup = |temps: &[PathBuf], done: &[PathBuf]| {
-        for p in temps.iter().chain(done) {
-            let _ = std::fs::remove_file(p);
-        }
-    };
     for file in files {
         let temp = temp_of(&file.path);
         if let Err(source) = write_parts(&temp, &file.parts) {
-            let _ = std::fs::remove_file(&temp);
-            cleanup(&temps, &[]);
+            temps.push(temp);
+            interrupt::discard(&temps);
             return Err(WriteError::Io {
                 path: file.path.clone(),
                 source,
@@ -337,18 +334,20 @@ pub(super) fn write_atomically(files: &[OutFile]) -> Result<(), WriteError> {
         temps.push(temp);
     }
     let mut done: Vec<PathBuf> = Vec::with_capacity(files.len());
-    // Side files first, the main file last.
+    // Side files first (still unfinished until the main file is in place),
+    // the main file last.
     let order = (1..files.len()).chain(std::iter::once(0));
     for i in order {
         let path = &files[i].path;
-        if let Err(source) = std::fs::rename(&temps[i], path) {
+        if let Err(source) = interrupt::rename(&temps[i], path, i != 0) {
             let pending: Vec<PathBuf> = temps
                 .iter()
                 .enumerate()
                 .filter(|(j, _)| !done.contains(&files[*j].path))
                 .map(|(_, t)| t.clone())
+                .chain(done.iter().cloned())
                 .collect();
-            cleanup(&pending, &done);
+            interrupt::discard(&pending);
             return Err(WriteError::Io {
                 path: path.clone(),
                 source,
@@ -356,13 +355,15 @@ pub(super) fn write_atomically(files: &[OutFile]) -> Result<(), WriteError> {
         }
         done.push(path.clone());
     }
+    interrupt::finished(&done);
     Ok(())
 }
 
-/// Creates (or truncates) `path` and writes `parts` one after the other.
+/// Creates (or truncates) `path`, recorded as unfinished, and writes
+/// `parts` one after the other.
 fn write_parts(path: &Path, parts: &[Vec<u8>]) -> std::io::Result<()> {
     use std::io::Write;
-    let mut file = std::fs::File::create(path)?;
+    let mut file = crate::interrupt::create(path)?;
     for part in parts {
         file.write_all(part)?;
     }
