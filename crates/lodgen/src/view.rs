@@ -9,18 +9,22 @@
 //! [`crate::progressive`]; `lodgen IN -o OUT.glb --progressive` writes one);
 //! or any mesh [`crate::io`] reads (a glTF without the extension too), run
 //! through an in-memory pipeline: simplify to 2 %, levels 100 / 50 / 10 /
-//! 2 %, stream-encoded. A file with one mesh that has vertex attributes
-//! (UVs, normals, colours, …) or several primitives goes through the wedge
-//! pipeline (seams kept, attributes in the stream); other files are merged
-//! and streamed as positions.
+//! 2 %, stream-encoded. A glTF's scene is drawn in its own space: each
+//! mesh once per node that draws it, through the nodes' world transforms
+//! ([`world_mesh`]), as one mesh of their primitives. A mesh with vertex
+//! attributes (UVs, normals, colours, …) or several primitives goes
+//! through the wedge pipeline (seams kept, attributes in the stream);
+//! other files are merged and streamed as positions.
 //!
 //! Routes: `/` (page), `/viewer.js`, `/info.json` (name, levels, coverage,
 //! stream size), `/stream.bin` (the stream, honouring single `Range:
 //! bytes=a-b` requests with 206 Partial Content so the page can fetch it in
 //! chunks).
 
+use crate::scene::{Origin, Primitive, Scene, SourceMesh};
 use crate::{cli, io, progressive};
 use anyhow::Context;
+use glam::{Mat3, Mat4, Quat, Vec3};
 use lodgen_pm::levels::{splits_for, LevelSpec};
 use lodgen_pm::stream::{
     decode, decode_with_attributes, encode, encode_with_attributes, EncodeError, EncodeOptions,
@@ -193,12 +197,22 @@ impl ViewData {
             }
         }
         // any other mesh (or a glTF without the extension): the pipeline, on
-        // every mesh the file's scene draws, merged
+        // every mesh the file's scene draws, merged (a glTF's: each
+        // primitive once per node that draws it, in the scene's space)
         let scene = io::read_scene(path).with_context(|| format!("reading {}", path.display()))?;
-        if let [mesh] = scene.meshes.as_slice() {
+        let world = world_mesh(&scene);
+        let one = match (&world, scene.meshes.as_slice()) {
+            (Some(w), _) => Some(w),
+            (None, [mesh]) => Some(mesh),
+            _ => None,
+        };
+        if let Some(mesh) = one {
             let attributes = crate::lod::stream_attributes(mesh);
             if !attributes.channels.is_empty() || mesh.primitives.len() > 1 {
                 return Self::from_source_mesh(name, mesh, &attributes);
+            }
+            if let [p] = mesh.primitives.as_slice() {
+                return Self::from_mesh(name, &p.positions, &p.indices);
             }
         }
         let mesh = cli::merged_mesh(&scene);
@@ -293,6 +307,96 @@ impl ViewData {
             "chunkBytes": DEFAULT_CHUNK,
         })
     }
+}
+
+/// A glTF scene's drawn primitives in the scene's space, as one mesh: each
+/// mesh's primitives once per node that draws it, through the node
+/// hierarchy's world transforms (positions transformed, normals by the
+/// inverse transpose, tangents' directions by the transform, normalised;
+/// a mirroring transform turns the triangles' winding back). Morph
+/// targets are left out. `None` for other formats (one space already).
+fn world_mesh(scene: &Scene) -> Option<SourceMesh> {
+    let Origin::Gltf { document, .. } = &scene.origin else {
+        return None;
+    };
+    let roots: Vec<usize> = document
+        .scenes
+        .get(document.scene.map_or(0, |s| s.value()))
+        .map(|s| s.nodes.iter().map(|n| n.value()).collect())
+        .unwrap_or_default();
+    let mut primitives = Vec::new();
+    // depth first, in document order; a node is visited once (the
+    // hierarchy is a forest; a broken one does not loop)
+    let mut seen = vec![false; document.nodes.len()];
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&n| (n, Mat4::IDENTITY)).collect();
+    while let Some((n, parent)) = stack.pop() {
+        let Some(node) = document
+            .nodes
+            .get(n)
+            .filter(|_| !std::mem::replace(&mut seen[n], true))
+        else {
+            continue;
+        };
+        let world = parent * local_transform(node);
+        if let Some(mesh) = node.mesh.and_then(|m| scene.meshes.get(m.value())) {
+            primitives.extend(mesh.primitives.iter().map(|p| transformed(p, &world)));
+        }
+        for c in node.children.iter().flatten().rev() {
+            stack.push((c.value(), world));
+        }
+    }
+    Some(SourceMesh {
+        name: String::new(),
+        primitives,
+    })
+}
+
+/// A node's transform: its matrix, or translation · rotation · scale.
+fn local_transform(node: &gltf_json::Node) -> Mat4 {
+    if let Some(m) = node.matrix {
+        return Mat4::from_cols_array(&m);
+    }
+    let t = node.translation.map_or(Vec3::ZERO, Vec3::from);
+    let r = node
+        .rotation
+        .map_or(Quat::IDENTITY, |q| Quat::from_array(q.0).normalize());
+    let s = node.scale.map_or(Vec3::ONE, Vec3::from);
+    Mat4::from_scale_rotation_translation(s, r, t)
+}
+
+/// `p` through `m` (see [`world_mesh`]).
+fn transformed(p: &Primitive, m: &Mat4) -> Primitive {
+    let normal = Mat3::from_mat4(*m).inverse().transpose();
+    let linear = Mat3::from_mat4(*m);
+    let mirror = linear.determinant() < 0.0;
+    let unit = |v: Vec3| v.normalize_or_zero().to_array();
+    let mut out = Primitive {
+        positions: p
+            .positions
+            .iter()
+            .map(|&x| m.transform_point3(Vec3::from(x)).to_array())
+            .collect(),
+        normals: p
+            .normals
+            .as_ref()
+            .map(|n| n.iter().map(|&x| unit(normal * Vec3::from(x))).collect()),
+        tangents: p.tangents.as_ref().map(|t| {
+            t.iter()
+                .map(|&[x, y, z, w]| {
+                    let [x, y, z] = unit(linear * Vec3::new(x, y, z));
+                    [x, y, z, if mirror { -w } else { w }]
+                })
+                .collect()
+        }),
+        targets: Vec::new(),
+        ..p.clone()
+    };
+    if mirror {
+        for c in out.indices.chunks_exact_mut(3) {
+            c.swap(1, 2);
+        }
+    }
+    out
 }
 
 /// A bound server; [`ViewServer::run`] answers until [`Stopper::stop`] (from [`ViewServer::stopper`]).

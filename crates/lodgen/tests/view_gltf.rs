@@ -5,6 +5,8 @@
 //! validator is installed (`tests/js/node_modules/gltf-validator`), both
 //! files must validate with 0 errors.
 
+mod support;
+
 use lodgen::progressive::{parse_glb, EXTENSION};
 use lodgen::view::ViewData;
 use lodgen_pm::shapes::icosphere;
@@ -279,4 +281,66 @@ fn spot_stream_with_uvs_is_within_a_quarter_of_plain_buffers() {
     // the same bound as the bunny's positions-only stream (lodgen-pm
     // tests/stream.rs): every level, exact UVs, at most 1.25× one level
     assert!(data.stream.len() as f64 <= 1.25 * buffers as f64);
+}
+
+/// `lodgen view` of a glTF whose scene draws one mesh through two nodes
+/// under a scaled parent (one mirrored and turned): the viewer shows the
+/// scene in its own space, each node's copy where its world transform puts
+/// it, both turned outwards (the mirrored copy's winding turned back).
+/// (It used to show the mesh once, at its own origin.)
+#[test]
+fn a_scene_is_viewed_through_its_node_transforms() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = icosphere(2);
+    let mut doc = support::gltf::Doc::new();
+    let pos = doc.floats(&m.positions, true);
+    let idx = doc.indices(&m.triangles);
+    doc.push(
+        "meshes",
+        serde_json::json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}),
+    );
+    // a quarter turn about z: (x, y) -> (-y, x)
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    doc.json["nodes"] = serde_json::json!([
+        {"scale": [2.0, 2.0, 2.0], "children": [1, 2]},
+        {"mesh": 0, "translation": [3.0, 0.0, 0.0]},
+        {"mesh": 0, "translation": [0.0, -3.0, 0.0], "rotation": [0.0, 0.0, h, h],
+         "scale": [-1.0, 1.0, 1.0]},
+    ]);
+    doc.json["scenes"] = serde_json::json!([{"nodes": [0]}]);
+    doc.json["scene"] = 0.into();
+    let path = dir.path().join("two.glb");
+    std::fs::write(&path, doc.glb()).unwrap();
+
+    let data = ViewData::load(&path).unwrap();
+    let (pm, _) = lodgen_pm::stream::decode(&data.stream).unwrap();
+    let full = pm.mesh_at_splits(pm.len());
+    assert_eq!(full.positions.len(), 2 * m.positions.len());
+    assert_eq!(full.triangles.len(), 2 * m.triangles.len());
+    let range = |k: usize| {
+        full.positions
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            })
+    };
+    // copy 1: x in 2·(3 ± 1); copy 2: y in 2·(-3 ± 1), x in 2·(±1)
+    let close = |a: f32, b: f32| (a - b).abs() < 0.02;
+    let (x, y) = (range(0), range(1));
+    assert!(close(x.0, -2.0) && close(x.1, 8.0), "x {x:?}");
+    assert!(close(y.0, -8.0) && close(y.1, 2.0), "y {y:?}");
+    // both copies enclose a positive volume (8 × the sphere's each)
+    let volume = |positions: &[[f32; 3]], triangles: &[[u32; 3]]| -> f64 {
+        triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| glam::DVec3::from(positions[i as usize].map(f64::from)));
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    };
+    let sphere = volume(&m.positions, &m.triangles);
+    assert!(sphere > 0.0);
+    let v = volume(&full.positions, &full.triangles);
+    assert!((v / (16.0 * sphere) - 1.0).abs() < 0.01, "{v} vs {sphere}");
 }
