@@ -147,6 +147,7 @@ fn simplify<'py>(
 ) -> PyResult<(Vec<LevelOut<'py>>, PyProgressiveMesh, String, bool)> {
     let args = parse(argv)?;
     let (positions, indices) = mesh_in(&vertices, &faces)?;
+    let triangles = indices.len() / 3;
     let scene = Scene {
         meshes: vec![SourceMesh {
             name: String::new(),
@@ -161,6 +162,9 @@ fn simplify<'py>(
     let build = py
         .detach(|| -> anyhow::Result<lod::MeshBuild> {
             let opts = args.build_options()?;
+            if opts.measured {
+                cli::check_sample_count(&opts.measure, triangles, triangles)?;
+            }
             let builds = lod::build_lods(&scene, &opts, &mut |_| {})
                 .map_err(anyhow::Error::from)
                 .map_err(|e| e.context("simplifying"))?;
@@ -257,14 +261,19 @@ fn measure<'py>(
     let tri =
         |i: &[u32]| -> Vec<[u32; 3]> { i.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect() };
     let (at, bt) = (tri(&ai), tri(&bi));
+    let opts = MeasureOptions::DEFAULT.with_samples_per_triangle(samples);
+    cli::check_sample_count(&opts, at.len(), bt.len()).map_err(error)?;
+    // (no distance to measure, rather than an infinite one; as the
+    // command's "no triangles")
+    for (name, t) in [("a", &at), ("b", &bt)] {
+        if t.is_empty() {
+            return Err(LodgenError::new_err(format!(
+                "measuring: mesh {name} has no triangles"
+            )));
+        }
+    }
     let r = py
-        .detach(|| {
-            measure_meshes(
-                MeshRef::new(&ap, &at),
-                MeshRef::new(&bp, &bt),
-                &MeasureOptions::DEFAULT.with_samples_per_triangle(samples),
-            )
-        })
+        .detach(|| measure_meshes(MeshRef::new(&ap, &at), MeshRef::new(&bp, &bt), &opts))
         .map_err(|e| error(anyhow::Error::from(e).context("measuring")))?;
     Ok(report_tuple(&r))
 }

@@ -441,6 +441,58 @@ fn inspect_and_measure_report_on_outputs() {
     assert!(stdout(&o).contains("A -> B maximum at ("), "{}", stdout(&o));
 }
 
+/// `lodgen measure` of a glTF whose scene draws no triangles (its one mesh
+/// on no node) is an error naming the file, in either place: there is no
+/// distance to measure (it printed an infinite one, exit code 0). So is a
+/// `--samples` beyond what memory holds.
+#[test]
+fn measure_refuses_no_triangles_and_too_many_samples() {
+    let d = tmp("measure-empty");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let mut doc = support::gltf::Doc::new();
+    let pos = doc.floats(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], true);
+    let idx = doc.indices(&[[0, 1, 2]]);
+    doc.push(
+        "meshes",
+        serde_json::json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}),
+    );
+    doc.json["scenes"] = serde_json::json!([{"nodes": []}]);
+    let undrawn = d.join("undrawn.gltf");
+    std::fs::write(&undrawn, doc.gltf()).unwrap();
+    let (a, b) = (input.to_str().unwrap(), undrawn.to_str().unwrap());
+    for args in [["measure", a, b], ["measure", b, a]] {
+        let o = lodgen(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains(&format!("measuring: {b} draws no triangles")),
+            "{err}"
+        );
+        assert!(stdout(&o).is_empty());
+    }
+    // --samples asking for more samples than memory holds: an error, not
+    // an aborted process (it died on a failed allocation), for a build too
+    let o = lodgen(&["measure", "--samples", "1e12", a, a]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("lower --samples"), "{}", stderr(&o));
+    let out = d.join("t.glb");
+    let o = lodgen(&[a, "--samples", "1e12", "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("lower --samples"), "{}", stderr(&o));
+    assert!(!out.exists());
+    let o = lodgen(&[
+        a,
+        "--samples",
+        "1e12",
+        "--measure",
+        "off",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 /// The bunny and cow LOD sets, as a pipeline would make them; the bunny's
 /// is what the Babylon.js check loads.
 #[test]

@@ -140,6 +140,13 @@ def _mesh_arrays(vertices: Any, faces: Any = None) -> Tuple[np.ndarray, np.ndarr
         raise LodgenError(f"vertices must be numbers, not {v.dtype}")
     if f.size and not np.issubdtype(f.dtype, np.integer):
         raise LodgenError(f"faces must be integer vertex indices, not {f.dtype}")
+    if f.dtype.kind == "u" and f.size and f.max() > np.iinfo(np.int64).max:
+        # (int64 would wrap it to a negative index)
+        k = int(np.argmax(f.max(axis=1)))
+        raise LodgenError(
+            f"triangle {k} refers to vertex {int(f[k].max())}, "
+            f"but there are only {len(v)} vertices"
+        )
     if v.dtype.kind == "f" and v.dtype.itemsize > 4 and v.size:
         big = np.abs(v) > np.finfo(np.float32).max
         if big.any():

@@ -157,6 +157,9 @@ def test_bad_input_raises_with_the_commands_message(tmp_path, lodgen_bin):
         lodgen.simplify(good, [[0, 1, 5]])
     with pytest.raises(lodgen.LodgenError, match=r"refers to vertex -1"):
         lodgen.simplify(good, [[0, 1, -1]])
+    # an unsigned index beyond int64 is named as it is, not wrapped negative
+    with pytest.raises(lodgen.LodgenError, match=r"triangle 1 refers to vertex 9223372036854775808, but there are only 3"):
+        lodgen.simplify(good, np.array([[0, 1, 2], [0, 1, 2**63]], dtype=np.uint64))
     with pytest.raises(lodgen.LodgenError, match=r"shape"):
         lodgen.simplify(good[:, :2], [[0, 1, 2]])
     with pytest.raises(lodgen.LodgenError, match=r"integer"):
@@ -184,6 +187,28 @@ def test_bad_input_raises_with_the_commands_message(tmp_path, lodgen_bin):
         line = line.strip().removeprefix("error: ").removeprefix("caused by: ")
         assert line in str(e.value)
     assert not (tmp_path / "b.glb").exists()
+
+
+def test_measure_refuses_no_triangles_and_too_many_samples(tmp_path, lodgen_bin):
+    v, f = torus(n=8, m=4)
+    none = np.zeros((0, 3), dtype=np.int64)
+    # (it returned an infinite distance)
+    with pytest.raises(lodgen.LodgenError, match=r"measuring: mesh a has no triangles"):
+        lodgen.measure((v, none), (v, f))
+    with pytest.raises(lodgen.LodgenError, match=r"measuring: mesh b has no triangles"):
+        lodgen.measure((v, f), (np.zeros((0, 3)), np.zeros((0, 3))))
+    # the command refuses such a file too
+    obj = tmp_path / "points.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    good = tmp_path / "t.obj"
+    write_obj(good, v, f)
+    cli = subprocess.run([lodgen_bin, "measure", str(obj), str(good)], capture_output=True, text=True)
+    assert cli.returncode == 1 and "no triangles" in cli.stderr, cli.stderr
+    # more samples than memory holds: an error (the process aborted)
+    with pytest.raises(lodgen.LodgenError, match=r"lower --samples"):
+        lodgen.measure((v, f), (v, f), samples=1e12)
+    with pytest.raises(lodgen.LodgenError, match=r"lower --samples"):
+        lodgen.simplify(v, f, levels=[0.5], samples=1e12)
 
 
 def test_out_of_range_numbers_raise_lodgen_errors_or_clamp_as_documented():

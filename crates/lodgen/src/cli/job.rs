@@ -90,6 +90,13 @@ pub fn build_file_metered(
     let mut scene = io::read_scene_with(input, &read_opts)
         .with_context(|| format!("reading {}", input.display()))?;
     let read = t_read.elapsed();
+    if opts.measured {
+        // (each level is measured against its mesh's input)
+        for mesh in &scene.meshes {
+            let t = mesh.primitives.iter().map(|p| p.indices.len() / 3).sum();
+            super::check_sample_count(&opts.measure, t, t)?;
+        }
+    }
     let mut warnings = scene.warnings.clone();
     // each level's buffers prepared while the build measures the next
     // (`lod::LevelHook`): the write then only assembles them

@@ -53,6 +53,26 @@ pub fn merged_mesh(scene: &Scene) -> lodgen_pm::Mesh {
     m
 }
 
+/// At most this many area samples per direction (`--samples` beyond it
+/// would ask for more memory than any machine has and abort the process).
+pub const MAX_AREA_SAMPLES: usize = 1 << 27;
+
+/// An error when `opts` would draw more than [`MAX_AREA_SAMPLES`] area
+/// samples for meshes of `tris_a` and `tris_b` triangles.
+pub fn check_sample_count(opts: &MeasureOptions, tris_a: usize, tris_b: usize) -> Result<()> {
+    let n = opts.area_sample_count(tris_a, tris_b);
+    if n > MAX_AREA_SAMPLES {
+        bail!(
+            "--samples {}: {n} area samples per direction for {} triangles, more than the {} \
+             lodgen draws at most; lower --samples",
+            opts.samples_per_triangle,
+            tris_a.max(tris_b),
+            MAX_AREA_SAMPLES
+        );
+    }
+    Ok(())
+}
+
 /// `lodgen measure A B`: prints [`measure_report`].
 pub fn measure_files(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result<()> {
     print!("{}", measure_report(a, b, samples, as_json)?);
@@ -71,10 +91,19 @@ pub fn measure_report(a: &Path, b: &Path, samples: f64, as_json: bool) -> Result
         Ok(merged_mesh(&scene))
     };
     let (ma, mb) = (read(a)?, read(b)?);
+    // (a scene can hold meshes none of its nodes draw: no distance to
+    // measure, rather than an infinite one)
+    for (p, m) in [(a, &ma), (b, &mb)] {
+        if m.triangles.is_empty() {
+            bail!("measuring: {} draws no triangles", p.display());
+        }
+    }
+    let opts = MeasureOptions::DEFAULT.with_samples_per_triangle(samples);
+    check_sample_count(&opts, ma.triangles.len(), mb.triangles.len())?;
     let r = metric::measure(
         MeshRef::new(&ma.positions, &ma.triangles),
         MeshRef::new(&mb.positions, &mb.triangles),
-        &MeasureOptions::DEFAULT.with_samples_per_triangle(samples),
+        &opts,
     )
     .context("measuring")?;
     if as_json {

@@ -28,6 +28,8 @@ pub use args::{
 pub use errors::{error_line, error_parts};
 pub use golden::golden_summary;
 pub use job::{build_file, build_file_metered, BuiltFile, FileTimes};
-pub use measure::{measure_files, measure_report, merged_mesh};
+pub use measure::{
+    check_sample_count, measure_files, measure_report, merged_mesh, MAX_AREA_SAMPLES,
+};
 pub use output::{build, stop_note, table, write_atomically};
 pub use progress::BatchProgress;
