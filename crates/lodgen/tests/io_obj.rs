@@ -207,9 +207,9 @@ fn vertex_zero_names_the_line() {
     let e = obj_err("v 0 0 0\nv 1 0 0\nv 0 1 0\n# comment\nf 0 1 2\n");
     assert_eq!(
         e.to_string(),
-        "bad.obj:5: face refers to vertex 0 (OBJ indices start at 1)"
+        "bad.obj:5:3: face refers to vertex 0 (OBJ indices start at 1)"
     );
-    assert_eq!(e.location, Location::Line(5));
+    assert_eq!(e.location, Location::Column { line: 5, column: 3 });
 }
 
 #[test]
@@ -229,7 +229,7 @@ fn index_out_of_range_names_the_line() {
     );
     assert_eq!(
         e.to_string(),
-        "bad.obj:5: face refers to vertex 4, but only 3 are defined"
+        "bad.obj:5:7: face refers to vertex 4, but only 3 are defined"
     );
     let e = obj_err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 -2 -1\n");
     assert_eq!(e.line(), Some(4));
@@ -239,7 +239,7 @@ fn index_out_of_range_names_the_line() {
     let e = obj_err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n");
     assert!(
         e.to_string()
-            .starts_with("bad.obj:4: face refers to normal 1"),
+            .starts_with("bad.obj:4:6: face refers to normal 1"),
         "{e}"
     );
 }
@@ -253,6 +253,27 @@ fn non_finite_coordinates_name_the_line() {
     assert_eq!(e.line(), Some(3));
     let e = obj_err("v 0 0 0\nvn 0 0 -inf\n");
     assert_eq!(e.line(), Some(2));
+    // file, line and column of the bad number, as a scan's single bad
+    // vertex is found (`file:line:column`, 1-based)
+    let e = obj_err("v 0 0 0\n  v 1.5   nan 0\nv 0 1 0\nf 1 2 3\n");
+    assert_eq!(
+        e.location,
+        Location::Column {
+            line: 2,
+            column: 11
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "bad.obj:2:11: vertex coordinate is not finite (NaN)"
+    );
+    let e = obj_err("v 0 0 0\nv 1 0 0\nv 0 1 1e39\nf 1 2 3\n");
+    assert_eq!(
+        e.to_string(),
+        "bad.obj:3:7: vertex coordinate is not finite (inf)"
+    );
+    let e = obj_err("v 0 0 0\nv 1 x 0\n");
+    assert_eq!(e.location, Location::Column { line: 2, column: 5 });
 }
 
 #[test]

@@ -11,6 +11,9 @@ pub enum Location {
     File,
     /// A 1-based line of a text format (OBJ, SMF, PLY header or ascii body).
     Line(usize),
+    /// A 1-based line and byte column of a text format (the token an OBJ
+    /// error is about).
+    Column { line: usize, column: usize },
     /// A 0-based element instance of a binary PLY body, e.g. `face 12`.
     Element { element: String, index: usize },
     /// A place in a glTF document, as a JSON path such as
@@ -24,6 +27,7 @@ impl fmt::Display for Location {
         match self {
             Location::File => Ok(()),
             Location::Line(line) => write!(f, ":{line}"),
+            Location::Column { line, column } => write!(f, ":{line}:{column}"),
             Location::Element { element, index } => write!(f, ": {element} {index}"),
             Location::Json(path) => write!(f, ": {path}"),
         }
@@ -103,7 +107,7 @@ impl ReadError {
     /// The 1-based line of the error, for text formats.
     pub fn line(&self) -> Option<usize> {
         match self.location {
-            Location::Line(line) => Some(line),
+            Location::Line(line) | Location::Column { line, .. } => Some(line),
             _ => None,
         }
     }

@@ -13,6 +13,7 @@
 //! or a token quoted in an error is converted lossily, as the whole text
 //! once was (ASCII whitespace never belongs to a malformed sequence).
 
+use std::cell::Cell;
 use std::ops::Range;
 use std::path::Path;
 
@@ -243,6 +244,9 @@ struct ChunkParser<'a> {
     line: usize,
     base: Counts,
     face: Vec<[u32; 3]>,
+    /// The address of the token an error is about (0: none), set on the
+    /// error path only: the error then names its column.
+    bad: Cell<usize>,
 }
 
 fn parse_chunk(bytes: &[u8], base: Counts, path: &Path) -> Chunk {
@@ -252,10 +256,19 @@ fn parse_chunk(bytes: &[u8], base: Counts, path: &Path) -> Chunk {
         line: base.lines,
         base,
         face: Vec::new(),
+        bad: Cell::new(0),
     };
     for line in lines(bytes) {
         p.line += 1;
-        if let Err(e) = p.statement(line) {
+        if let Err(mut e) = p.statement(line) {
+            // (the bad token's 1-based byte column, when known)
+            let column = p.bad.get().wrapping_sub(line.as_ptr() as usize);
+            if column < line.len() {
+                e.location = Location::Column {
+                    line: p.line,
+                    column: column + 1,
+                };
+            }
             p.out.error = Some(e);
             break;
         }
@@ -315,20 +328,32 @@ impl ChunkParser<'_> {
         Ok(())
     }
 
+    /// An error about `token`, a piece of the line being read.
+    fn err_at(&self, token: &[u8], kind: ErrorKind) -> ReadError {
+        self.bad.set(token.as_ptr() as usize);
+        self.err(kind)
+    }
+
     /// One number token (as `str::parse::<f32>` reads it), finite.
     fn number(&self, token: &[u8], what: &str) -> Result<f32, ReadError> {
         let parsed = parse_f32(token);
         let Some(value) = parsed else {
-            return Err(self.err(ErrorKind::Syntax {
-                expected: format!("a number for {what}"),
-                found: lossy(token),
-            }));
+            return Err(self.err_at(
+                token,
+                ErrorKind::Syntax {
+                    expected: format!("a number for {what}"),
+                    found: lossy(token),
+                },
+            ));
         };
         if !value.is_finite() {
-            return Err(self.err(ErrorKind::NonFinite {
-                what: what.to_owned(),
-                value,
-            }));
+            return Err(self.err_at(
+                token,
+                ErrorKind::NonFinite {
+                    what: what.to_owned(),
+                    value,
+                },
+            ));
         }
         Ok(value)
     }
@@ -352,23 +377,29 @@ impl ChunkParser<'_> {
     /// One OBJ index (1-based or negative) against `count` items.
     fn resolve(&self, token: &[u8], count: usize, target: &'static str) -> Result<u32, ReadError> {
         let Some(index) = parse_i64(token) else {
-            return Err(self.err(ErrorKind::Syntax {
-                expected: format!("a {target} index"),
-                found: lossy(token),
-            }));
+            return Err(self.err_at(
+                token,
+                ErrorKind::Syntax {
+                    expected: format!("a {target} index"),
+                    found: lossy(token),
+                },
+            ));
         };
         let resolved = match index {
-            0 => return Err(self.err(ErrorKind::ObjIndexZero { target })),
+            0 => return Err(self.err_at(token, ErrorKind::ObjIndexZero { target })),
             i if i > 0 => i - 1,
             i => count as i64 + i,
         };
         if resolved < 0 || resolved >= count as i64 {
-            return Err(self.err(ErrorKind::IndexOutOfRange {
-                what: "face",
-                target,
-                index,
-                count,
-            }));
+            return Err(self.err_at(
+                token,
+                ErrorKind::IndexOutOfRange {
+                    what: "face",
+                    target,
+                    index,
+                    count,
+                },
+            ));
         }
         Ok(resolved as u32)
     }
