@@ -713,6 +713,19 @@ pub fn is_batch(args: &BuildArgs) -> bool {
 /// when any file failed; else the number of warnings.
 pub fn run(args: &BuildArgs) -> Result<usize> {
     let Some(out_dir) = &args.batch.out_dir else {
+        // a second "input" that is no file is most often an option's value
+        // cut in two by a space (`--levels 50%, 10%`)
+        let stray = args.inputs.iter().skip(1).find(|i| {
+            let text = i.to_string_lossy();
+            !i.exists() && !has_glob_chars(&text) && text.starts_with(|c: char| c.is_ascii_digit())
+        });
+        if let Some(stray) = stray {
+            bail!(
+                "{}: no such input file; a space inside an option's value? (write `--levels \
+                 50%,10%`, not `--levels 50%, 10%`)",
+                stray.display()
+            );
+        }
         bail!("several inputs or a directory need --out-dir DIR (batch mode)");
     };
     if args.batch.jobs == 0 {

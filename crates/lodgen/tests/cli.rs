@@ -258,6 +258,25 @@ fn a_negative_value_reaches_its_options_check() {
 /// and the reader's `FILE:LINE: what` make one line, and an I/O error
 /// already in its parent's text is not repeated as a cause (batch mode's
 /// one-line messages likewise).
+/// `--levels 50%, 10%` (a space after the comma) makes `10%` a second
+/// input: the error says so, instead of asking for batch mode's --out-dir.
+#[test]
+fn a_level_cut_off_by_a_space_is_named() {
+    let d = tmp("stray-level");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let o = lodgen(&[input.to_str().unwrap(), "--levels", "50%,", "10%"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("10%: no such input file; a space inside an option's value?"),
+        "{err}"
+    );
+    // two real inputs without --out-dir still ask for it
+    let o = lodgen(&[input.to_str().unwrap(), input.to_str().unwrap()]);
+    assert!(stderr(&o).contains("need --out-dir DIR"), "{}", stderr(&o));
+}
+
 #[test]
 fn errors_say_the_file_and_the_cause_once() {
     let d = tmp("errors-once");
