@@ -95,6 +95,10 @@ impl Spinner {
                     )
                 }
                 Stage::Finishing => format!("{mesh}: simplifying, writing the vertex-split log"),
+                Stage::Clustering => format!(
+                    "{mesh}: simplifying, {:.0} % of the target, cutting the mesh into clusters",
+                    100.0 * self.meter.fraction().unwrap_or(0.0)
+                ),
             };
             // (the stage may have ended meanwhile: the main thread's line wins)
             if self.meter.stage() == stage && !self.done.load(Relaxed) {

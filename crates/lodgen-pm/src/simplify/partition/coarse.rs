@@ -8,7 +8,7 @@
 
 use super::{rounds, Local, Tris};
 use crate::mesh::adjacency::Fans;
-use crate::simplify::Simplifier;
+use crate::simplify::{Simplifier, Stage};
 use rayon::prelude::*;
 
 /// First-stage clusters per coarse cluster (262,144 triangles with the
@@ -45,6 +45,7 @@ impl Simplifier {
         {
             return;
         }
+        self.set_stage(Stage::Clustering);
         let home = self.homes(size);
         // (rebuilt at the end, as the first stage's)
         self.vtris = Fans::default();
@@ -55,7 +56,16 @@ impl Simplifier {
             .filter(|l| !l.s.tris.is_empty())
             .collect();
         drop(home);
-        rounds(&mut locals, self.live_tris, self.target, stop, factor);
+        self.set_stage(Stage::Contracting);
+        let meter = self.meter.as_deref();
+        rounds(
+            &mut locals,
+            self.live_tris,
+            self.target,
+            stop,
+            factor,
+            meter,
+        );
         // (the coarse rounds count after the first stage's)
         let passes = std::mem::take(&mut self.stats.passes);
         let done: Vec<_> = locals.into_iter().map(|l| self.write_back(l)).collect();

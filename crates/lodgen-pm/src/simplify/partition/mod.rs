@@ -51,7 +51,7 @@
 mod coarse;
 mod merge;
 
-use super::{Pass, Simplifier, Stats};
+use super::{Meter, Pass, Simplifier, Stage, Stats};
 use crate::mesh::adjacency::{FanLookup, Fans};
 use crate::progressive::Log;
 use crate::simplify::heap::{Buckets, QuadHeap};
@@ -146,6 +146,13 @@ struct Done {
 }
 
 impl Simplifier {
+    /// Tells the meter, if any, what the run is doing.
+    fn set_stage(&self, stage: Stage) {
+        if let Some(m) = &self.meter {
+            m.set_stage(stage);
+        }
+    }
+
     /// The cluster size when `run` should simplify in clusters first.
     pub(super) fn partition_size(&self) -> Option<usize> {
         let size = self.opts.partition.filter(|&s| s > 0)?;
@@ -176,6 +183,7 @@ impl Simplifier {
             return;
         };
         let nt = self.tris.len();
+        self.set_stage(Stage::Clustering);
         let home = self.homes(size);
         // (the clusters build their own fans: the whole mesh's are not
         // read again before they are rebuilt at the end, and freeing them
@@ -194,7 +202,16 @@ impl Simplifier {
         drop(home);
         self.tri_alive = Vec::new();
         let stop = (KEEP * nt as f64) as usize;
-        rounds(&mut locals, self.live_tris, self.target, stop, factor);
+        self.set_stage(Stage::Contracting);
+        let meter = self.meter.as_deref();
+        rounds(
+            &mut locals,
+            self.live_tris,
+            self.target,
+            stop,
+            factor,
+            meter,
+        );
         // (zeroed pages, mapped as the write-back reaches them while it
         // frees the clusters' copies: the whole mesh's arrays and the
         // clusters' are never resident at once; the held vertices, spread
@@ -448,13 +465,21 @@ impl Simplifier {
 /// Rounds over the clusters (`live` triangles in all, the whole mesh's
 /// target `target`) until `stop` triangles live, `MAX_ROUNDS` were made,
 /// or a round removed less than 1 % (the held borders block the rest);
-/// then frees what the write-back and the merge do not read.
-fn rounds(locals: &mut [Local], mut live: usize, target: usize, stop: usize, factor: f32) {
+/// then frees what the write-back and the merge do not read. Each
+/// cluster's walk counts its removed triangles off `meter`'s.
+fn rounds(
+    locals: &mut [Local],
+    mut live: usize,
+    target: usize,
+    stop: usize,
+    factor: f32,
+    meter: Option<&Meter>,
+) {
     for _ in 0..MAX_ROUNDS {
         if live <= stop {
             break;
         }
-        let removed = round(locals, live, live - target, live - stop, factor);
+        let removed = round(locals, live, live - target, live - stop, factor, meter);
         live -= removed;
         if removed < live / 100 {
             break; // the held borders block the rest
@@ -473,7 +498,14 @@ fn rounds(locals: &mut [Local], mut live: usize, target: usize, stop: usize, fac
 /// `goal / 2`-th pair (as a pass of the whole-mesh walk takes it), and each
 /// cluster walks its pairs up to it, removing at most its share (by live
 /// triangles) of `most`. Returns the triangles removed.
-fn round(locals: &mut [Local], live: usize, goal: usize, most: usize, factor: f32) -> usize {
+fn round(
+    locals: &mut [Local],
+    live: usize,
+    goal: usize,
+    most: usize,
+    factor: f32,
+    meter: Option<&Meter>,
+) -> usize {
     locals.par_iter_mut().for_each(|l| {
         // (u128: live × most may not fit a usize)
         let share = (l.s.live_tris as u128 * most as u128 / live.max(1) as u128) as usize;
@@ -487,6 +519,9 @@ fn round(locals: &mut [Local], live: usize, goal: usize, most: usize, factor: f3
         .map(|l| {
             let removed = walk(&mut l.s, &l.held, limit);
             l.rounds.push(l.s.log.records.len() as u32);
+            if let Some(m) = meter {
+                m.remove(removed);
+            }
             removed
         })
         .sum()
