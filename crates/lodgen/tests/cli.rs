@@ -290,7 +290,7 @@ fn errors_say_the_file_and_the_cause_once() {
     let err = stderr(&o);
     let first = err.lines().next().unwrap_or_default();
     assert!(
-        first.starts_with(&format!("error: reading {}:3: ", bad.display())),
+        first.starts_with(&format!("error: reading {}:3:3: ", bad.display())),
         "{err}"
     );
     assert_eq!(err.matches("bad.obj").count(), 1, "{err}");
