@@ -149,6 +149,12 @@ mod unix {
         let mut signal: libc::c_int = 0;
         // SAFETY: `set` is initialised; `signal` is a valid out pointer.
         while unsafe { libc::sigwait(&set, &mut signal) } != 0 {}
+        // a second Ctrl-C while the files are removed ends the process at
+        // once (the default action, on this thread, the only one taking it)
+        // SAFETY: as in `install`, on this thread's mask only.
+        unsafe {
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
+        }
         let (_held, removed) = super::sweep();
         let name = SIGNALS
             .iter()
