@@ -226,6 +226,48 @@ fn a_bad_output_path_is_refused_before_the_work() {
             "read before the output was checked: {err}"
         );
     }
+    // the input under another name: refused, the input left as it was
+    // (`-o ./x.glb` for `x.glb` overwrote it)
+    let input = d.join("in.obj");
+    write_torus_obj(&input);
+    let glb = d.join("in.glb");
+    assert!(
+        lodgen(&[input.to_str().unwrap(), "-o", glb.to_str().unwrap(), "-q"])
+            .status
+            .success()
+    );
+    let before = std::fs::read(&glb).unwrap();
+    let hard = d.join("hard.glb");
+    std::fs::hard_link(&glb, &hard).unwrap();
+    // (run in `d`: `in.glb` and `./in.glb` are different paths)
+    let mut cases = vec![
+        (PathBuf::from("in.glb"), PathBuf::from("./in.glb")),
+        (PathBuf::from("in.glb"), glb.clone()),
+        (glb.clone(), hard),
+    ];
+    #[cfg(unix)]
+    {
+        let link = d.join("link.glb");
+        std::os::unix::fs::symlink(&glb, &link).unwrap();
+        cases.push((link, glb.clone()));
+    }
+    for (from, to) in &cases {
+        let args = [from.to_str().unwrap(), "-o", to.to_str().unwrap(), "-q"];
+        let o = support::lodgen_in(&args, &d);
+        assert_eq!(
+            o.status.code(),
+            Some(1),
+            "{} -> {}",
+            from.display(),
+            to.display()
+        );
+        assert!(
+            stderr(&o).contains("would overwrite the input"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert_eq!(std::fs::read(&glb).unwrap(), before);
     std::fs::remove_dir_all(&d).unwrap();
 }
 

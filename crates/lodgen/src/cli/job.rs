@@ -68,7 +68,7 @@ pub fn build_file_metered(
     // likewise each simplified mesh's input positions and indices, which
     // nothing but the stream reads once the levels are extracted
     opts.keep_input = args.progressive;
-    if output == input {
+    if same_file(input, output) {
         bail!("the output {} would overwrite the input", output.display());
     }
     // (before the work, which a bad output path would throw away)
@@ -149,6 +149,28 @@ pub fn build_file_metered(
         times: FileTimes { read, build, write },
         warnings,
     })
+}
+
+/// Whether `a` and `b` name one file: the same path, the same file after
+/// symbolic links and `.` / `..` are resolved (`./x.glb`, an absolute path,
+/// a link), or (Unix) the same inode (a hard link).
+fn same_file(a: &Path, b: &Path) -> bool {
+    if a == b {
+        return true;
+    }
+    if let (Ok(x), Ok(y)) = (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        if x == y {
+            return true;
+        }
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+    }
+    false
 }
 
 /// The builds and every chain to write: with `strict` the first mesh that
