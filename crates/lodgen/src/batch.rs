@@ -765,15 +765,11 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
         l.finish();
     }
     let outcome = outcome?;
-    if !args.quiet {
+    if !args.quiet && !cli::report_to_stdout(args) {
         print!("{}", outcome.table());
     }
     if let Some(path) = &args.report {
-        cli::write_atomically(
-            path,
-            serde_json::to_string_pretty(&outcome.report_json())?.as_bytes(),
-        )
-        .with_context(|| format!("writing the report {}", path.display()))?;
+        cli::write_report(path, &outcome.report_json())?;
     }
     if let Some(e) = &outcome.manifest_error {
         if outcome.failed() == 0 {

@@ -305,10 +305,7 @@ fn build(
             None => run()?,
         };
         if let Some(path) = &args.report {
-            cli::write_atomically(
-                path,
-                serde_json::to_string_pretty(&built.report_json(&input))?.as_bytes(),
-            )?;
+            cli::write_report(path, &built.report_json(&input))?;
         }
         Ok(serde_json::to_string(&built.report_json(&input))?)
     })

@@ -745,6 +745,30 @@ fn output_does_not_depend_on_the_thread_count() {
 /// `-v` prints tables in words (phases with their share, refusals, what
 /// preparation removed), never a Rust `Debug` dump, and `--report` carries
 /// the same data.
+/// `--report -` writes the report to standard output in place of the
+/// table (a file named `-` before), for a single file and for a batch; `-v`
+/// still goes to standard error.
+#[test]
+fn report_dash_goes_to_standard_output() {
+    let d = tmp("report-dash");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let args = [input.to_str().unwrap(), "--report", "-", "-v"];
+    let o = support::lodgen_in(&args, &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not the JSON report ({e}):\n{}", stdout(&o)));
+    assert_eq!(level_triangles(&r), vec![1152, 230, 46]);
+    assert!(stderr(&o).contains("time by phase"), "{}", stderr(&o));
+    assert!(!d.join("-").exists());
+    let o = support::lodgen_in(&["torus.obj", "--out-dir", "out", "--report", "-"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not the batch report ({e}):\n{}", stdout(&o)));
+    assert_eq!(r["files"][0]["status"], "built", "{r}");
+    assert!(!d.join("-").exists());
+}
+
 #[test]
 fn verbose_prints_tables_and_the_report_carries_them() {
     let d = tmp("verbose");

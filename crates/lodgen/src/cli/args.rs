@@ -221,7 +221,8 @@ pub struct BuildArgs {
     pub progressive: bool,
 
     /// Also write the table as JSON to this file (in batch mode: every
-    /// file's report with its status, error and time).
+    /// file's report with its status, error and time); `-`: to standard
+    /// output, instead of the table.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
 

@@ -43,11 +43,15 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usiz
         level_bytes,
         ..
     } = &built;
-    if !args.quiet {
+    // (with `--report -` standard output is the report's)
+    let table_out = !args.quiet && !report_to_stdout(args);
+    if table_out {
         print!("{}", table(builds, level_bytes));
-        if args.verbose {
-            eprint!("{}", summary::verbose(&built, elapsed));
-        }
+    }
+    if !args.quiet && args.verbose {
+        eprint!("{}", summary::verbose(&built, elapsed));
+    }
+    if table_out {
         println!(
             "wrote {} in {:.2} s",
             output.display(),
@@ -55,9 +59,7 @@ pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usiz
         );
     }
     if let Some(path) = &args.report {
-        let json = built.report_json(input);
-        write_atomically(path, serde_json::to_string_pretty(&json)?.as_bytes())
-            .with_context(|| format!("writing the report {}", path.display()))?;
+        write_report(path, &built.report_json(input))?;
     }
     for w in &built.warnings {
         eprintln!("warning: {}: {w}", input.display());
@@ -247,6 +249,23 @@ fn report_json(
             })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
     })
+}
+
+/// Whether `--report -` sends the report to standard output (in place of
+/// the table).
+pub fn report_to_stdout(args: &BuildArgs) -> bool {
+    args.report.as_deref() == Some(Path::new("-"))
+}
+
+/// The `--report` JSON to `path`, or to standard output for `-`.
+pub fn write_report(path: &Path, json: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(json)?;
+    if path == Path::new("-") {
+        println!("{text}");
+        return Ok(());
+    }
+    write_atomically(path, text.as_bytes())
+        .with_context(|| format!("writing the report {}", path.display()))
 }
 
 /// Write `bytes` to a temporary file beside `path`, then rename (removed
