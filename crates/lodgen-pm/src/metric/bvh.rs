@@ -281,8 +281,10 @@ impl TriangleBvh {
     }
 
     /// The closest point to `p` on the mesh surface: `(squared distance, triangle index, point)`,
-    /// or `None` when the mesh has no triangles. When several triangles are equally close, which
-    /// one is returned is deterministic but otherwise unspecified.
+    /// or `None` when the mesh has no triangles. When several triangles are equally close (the
+    /// same `f64` squared distance), the one returned is the first in the hierarchy's leaf
+    /// order (the Z-order of the triangles' centroids, equal codes by triangle index), whatever
+    /// order the search meets them in.
     pub fn closest_point(&self, p: [f64; 3]) -> Option<(f64, u32, [f64; 3])> {
         self.closest_slot(p, None)
             .map(|(d2, h, q)| (d2, self.ids[h.slot as usize], q))
@@ -291,7 +293,8 @@ impl TriangleBvh {
     /// Like [`Self::closest_point`], but first measures the triangle of `hint` (the answer to
     /// a nearby previous query), whose distance bounds the search from the start, and searches
     /// upwards from its leaf. Returns where the answer lies (its slot, not its triangle
-    /// index). The distance does not depend on the hint.
+    /// index). Neither the distance nor the triangle (ties: the first slot) depends on the
+    /// hint.
     #[inline]
     pub(crate) fn closest_slot(
         &self,
@@ -546,7 +549,9 @@ impl TriangleBvh {
             let [a, b, c] = self.slot_triangle(slot);
             let q = closest_point_on_triangle_flat(p, a, b, c);
             let d2 = distance_squared(p, q);
-            if d2 < best.d2 {
+            // (of equally close triangles the first in leaf order, whatever order they are met
+            // in: neither the nodes' layout nor the hint decides the answer)
+            if d2 < best.d2 || (d2 == best.d2 && slot < best.hint.slot) {
                 *best = Best {
                     d2,
                     hint: Hint { slot, node },
@@ -658,5 +663,63 @@ mod tests {
             settled > 300 && above > 300,
             "{settled} settled, {above} above"
         );
+    }
+
+    /// Of equally close triangles the first in leaf order is the answer, whichever the search
+    /// meets first and whatever the hint: queries at the mesh's own vertices (every triangle of
+    /// the fan at distance 0) and just off them, on a knot whose triangles are numbered in
+    /// shuffled order, each from no hint and from a hint at every triangle of the answer's fan.
+    /// Fails when the first of equal distances met is kept (the hint's, when it is in the fan).
+    #[test]
+    fn ties_go_to_the_first_slot() {
+        let mut mesh = shapes::torus_knot(2, 3, 60, 10, 0.0);
+        let n = mesh.triangles.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let r = (i as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 40;
+            order.swap(i, r as usize % (i + 1));
+        }
+        mesh.triangles = order.iter().map(|&t| mesh.triangles[t]).collect();
+        let bvh = TriangleBvh::new(MeshRef::new(&mesh.positions, &mesh.triangles)).unwrap();
+        // (every leaf slot's hint: the internal node whose child holds it)
+        let mut hints = vec![None; n];
+        for (i, node) in bvh.nodes.iter().enumerate() {
+            for c in 0..4 {
+                if node.count[c] != 0 && node.count[c] != node::EMPTY {
+                    for slot in node.first[c]..node.first[c] + u32::from(node.count[c]) {
+                        let node = i as u32;
+                        hints[bvh.ids[slot as usize] as usize] = Some(Hint { slot, node });
+                    }
+                }
+            }
+        }
+        let brute = |p: [f64; 3]| {
+            let d = |t: &[u32; 3]| {
+                let [a, b, c] = t.map(|v| widen(mesh.positions[v as usize]));
+                distance_squared(p, closest_point_on_triangle(p, a, b, c))
+            };
+            let best = mesh.triangles.iter().map(d).fold(f64::INFINITY, f64::min);
+            let mut tied: Vec<u32> = (0..n as u32)
+                .filter(|&t| d(&mesh.triangles[t as usize]) == best)
+                .collect();
+            tied.sort_by_key(|&t| hints[t as usize].map(|h: Hint| h.slot));
+            (best, tied)
+        };
+        let mut with_ties = 0;
+        for (v, &q) in mesh.positions.iter().enumerate() {
+            for off in [0.0, 1e-3] {
+                let p = widen(q).map(|x| x + off * (v % 3) as f64);
+                let (d2, tied) = brute(p);
+                let (got, t, _) = bvh.closest_point(p).unwrap();
+                assert_eq!((got, t), (d2, tied[0]), "vertex {v} offset {off}");
+                with_ties += usize::from(tied.len() > 1);
+                for &h in &tied {
+                    let (got, slot, _) = bvh.closest_slot(p, hints[h as usize]).unwrap();
+                    let t = bvh.ids[slot.slot as usize];
+                    assert_eq!((got, t), (d2, tied[0]), "vertex {v} from hint {h}");
+                }
+            }
+        }
+        assert!(with_ties > 500, "{with_ties} queries with ties");
     }
 }
