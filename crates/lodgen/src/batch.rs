@@ -18,7 +18,6 @@
 use crate::cli::{self, BuildArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
@@ -27,8 +26,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// The manifest's file name inside `--out-dir`.
-pub const MANIFEST: &str = ".lodgen-manifest.json";
+use crate::manifest::Running;
+pub use crate::manifest::{Manifest, ManifestEntry, MANIFEST};
 
 /// Extensions a directory walk picks up (lower case).
 pub const MESH_EXTENSIONS: [&str; 5] = ["obj", "ply", "smf", "gltf", "glb"];
@@ -149,42 +148,6 @@ pub fn expand_inputs(inputs: &[PathBuf], skip: Option<&Path>) -> Result<Vec<Batc
         }
     }
     Ok(out)
-}
-
-/// One manifest entry: what an output was built from.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-pub struct ManifestEntry {
-    pub input: String,
-    pub input_hash: String,
-    pub options_hash: String,
-    /// The file's report when it was built (shown again when skipped).
-    pub report: serde_json::Value,
-}
-
-/// `DIR/.lodgen-manifest.json`: output path (relative, `/`-separated) →
-/// what it was built from.
-#[derive(Serialize, Deserialize, Clone, Debug, Default, PartialEq)]
-pub struct Manifest {
-    pub lodgen_version: String,
-    pub outputs: BTreeMap<String, ManifestEntry>,
-}
-
-impl Manifest {
-    /// The manifest in `dir`, empty when there is none or it is unreadable
-    /// (then every file is rebuilt).
-    pub fn load(dir: &Path) -> Manifest {
-        std::fs::read(dir.join(MANIFEST))
-            .ok()
-            .and_then(|b| serde_json::from_slice::<Manifest>(&b).ok())
-            .filter(|m| m.lodgen_version == env!("CARGO_PKG_VERSION"))
-            .unwrap_or_default()
-    }
-
-    pub fn save(&self, dir: &Path) -> Result<()> {
-        let path = dir.join(MANIFEST);
-        cli::write_atomically(&path, serde_json::to_string_pretty(self)?.as_bytes())
-            .with_context(|| format!("writing the manifest {}", path.display()))
-    }
 }
 
 fn key(rel: &Path) -> String {
@@ -559,6 +522,8 @@ pub fn run_batch_watched(
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<FileOutcome>>> = Mutex::new(vec![None; inputs.len()]);
+    // (on disk as files finish: an interrupted batch keeps what it built)
+    let running = Running::new(out_dir, &manifest);
     let worker = || -> Result<()> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -571,6 +536,9 @@ pub fn run_batch_watched(
             let item = &inputs[k];
             on_start(item);
             let outcome = pool.install(|| one_file(item, out_dir, args, &manifest, &options_hash));
+            if let (Status::Built, Some((k, e))) = (&outcome.status, &outcome.entry) {
+                running.built(k, e);
+            }
             on_done(done.fetch_add(1, Ordering::Relaxed) + 1, &outcome);
             results.lock().unwrap_or_else(|p| p.into_inner())[k] = Some(outcome);
         }

@@ -11,6 +11,7 @@ pub mod inspect;
 pub mod interrupt;
 pub mod io;
 pub mod lod;
+pub mod manifest;
 pub mod progressive;
 #[cfg(feature = "python")]
 pub mod python;

@@ -165,7 +165,7 @@ fn sigint_during_the_write_leaves_no_file() {
 
 /// Batch mode (`--out-dir`, one file at a time): SIGTERM while the second
 /// output is written leaves the first, complete, output and nothing of
-/// the second.
+/// the second, and the manifest knows the first: a re-run skips it.
 #[test]
 fn sigterm_in_a_batch_keeps_finished_outputs_only() {
     let dir = tempfile::tempdir().unwrap();
@@ -191,11 +191,32 @@ fn sigterm_in_a_batch_keeps_finished_outputs_only() {
         err.contains("lodgen: interrupted (SIGTERM); removed 1 unfinished output file"),
         "{err}"
     );
-    assert_eq!(files(&out), vec!["a.glb".to_string()]);
+    assert_eq!(
+        files(&out),
+        vec![".lodgen-manifest.json".to_string(), "a.glb".to_string()]
+    );
     let a = std::fs::read(out.join("a.glb")).unwrap();
     assert_eq!(&a[..4], b"glTF");
     assert_eq!(
         u32::from_le_bytes([a[8], a[9], a[10], a[11]]) as usize,
         a.len()
+    );
+    // the manifest recorded the finished file as it ended: the batch run
+    // again builds only the other one (it rebuilt both)
+    let o = support::lodgen_in(&args, dir.path());
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    let table = support::stdout(&o);
+    let status = |name: &str| {
+        table
+            .lines()
+            .find(|l| l.contains(name))
+            .and_then(|l| l.split_whitespace().last())
+            .unwrap_or_default()
+            .to_string()
+    };
+    assert_eq!(
+        (status("a.obj"), status("b.obj")),
+        ("unchanged".into(), "built".into()),
+        "{table}"
     );
 }
