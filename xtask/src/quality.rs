@@ -39,6 +39,11 @@
 //! input and lodgen's and meshoptimizer's levels of each mesh as OBJ files
 //! to `DIR` (`quality/levels.rs`), for `lodgen measure`, which says where a
 //! cell's maximum lies.
+//!
+//! A cell where lodgen's and the best peer's Hausdorff and RMS are all
+//! under the rounding of the input file's coordinates (its stored digits,
+//! `quality/rounding.rs`) is marked a tie, not a loss: the gap there is
+//! the input's noise (fandisk 50 %).
 
 use anyhow::{bail, Context, Result};
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
@@ -49,6 +54,8 @@ use std::path::{Path, PathBuf};
 
 mod levels;
 mod peers;
+mod plot;
+mod rounding;
 
 use peers::{peer_python, python_peers, PEERS};
 
@@ -95,6 +102,9 @@ struct Row {
     /// The triangle count the peers were asked for: lodgen's, unless a quick
     /// run compares with cells recorded at another count.
     asked: usize,
+    /// The rounding of the input file's coordinates in % of the diagonal
+    /// (`quality/rounding.rs`; None: not known).
+    rounding: Option<f64>,
 }
 
 struct Args {
@@ -172,10 +182,28 @@ fn parse(args: &[String]) -> Result<Args> {
     Ok(out)
 }
 
+/// The OBJ file mesh `name` is made from.
+fn source(assets: &Path, name: &str) -> PathBuf {
+    let file = if name == "bunny-1m" { "bunny" } else { name };
+    assets.join(format!("{file}.obj"))
+}
+
+/// The rounding of mesh `name`'s file (`quality/rounding.rs`) in % of
+/// the `reference`'s diagonal (None: not known). (Midpoint subdivision
+/// keeps the bound: a midpoint of rounded points is off by at most their
+/// largest rounding.)
+fn input_rounding(assets: &Path, name: &str, reference: &Reference) -> Result<Option<f64>> {
+    let path = source(assets, name);
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    Ok(rounding::obj_half_step(&text)
+        .filter(|_| reference.diagonal() > 0.0)
+        .map(|h| 100.0 * h / reference.diagonal()))
+}
+
 /// The welded, cleaned input mesh `name`.
 fn input(assets: &Path, name: &str) -> Result<Mesh> {
-    let file = if name == "bunny-1m" { "bunny" } else { name };
-    let path = assets.join(format!("{file}.obj"));
+    let path = source(assets, name);
     let scene =
         lodgen::io::read_scene(&path).with_context(|| format!("reading {}", path.display()))?;
     let mut m = lodgen::cli::merged_mesh(&scene);
@@ -296,6 +324,7 @@ pub fn run(args: &[String]) -> Result<()> {
     for &name in &args.meshes {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
+        let rounding = input_rounding(&assets, name, &reference)?;
         let levels = lodgen_levels(&m, &args)?;
         if let Some(dir) = &args.write_levels {
             write_levels(dir, name, &m, &levels)?;
@@ -361,6 +390,7 @@ pub fn run(args: &[String]) -> Result<()> {
                 lodgen,
                 peers: cells,
                 asked,
+                rounding,
             };
             println!("{}", line(&row));
             rows.push(row);
@@ -392,7 +422,7 @@ pub fn run(args: &[String]) -> Result<()> {
 /// `rerun`: the cells the Python peers ran for.
 fn write_docs(meshes: &[&str], rows: &[Row], samples: usize, rerun: usize) -> Result<()> {
     let docs = crate::workspace_root().join("docs");
-    plot(&docs.join("quality.png"), meshes, rows)?;
+    plot::plot(&docs.join("quality.png"), meshes, rows)?;
     let md = docs.join("quality.md");
     let old = std::fs::read_to_string(&md).unwrap_or_default();
     let hand = old.find(HAND_WRITTEN).map_or("", |i| &old[i..]);
@@ -555,7 +585,29 @@ fn line(row: &Row) -> String {
             row.lodgen.rms / r
         );
     }
+    if let Some(x) = tie(row) {
+        let _ = write!(s, " (a tie: under the input's rounding, ±{})", percent(x));
+    }
     s
+}
+
+/// The input's rounding (% of the diagonal) when lodgen's and the best
+/// peer's Hausdorff and RMS are all under it: the cell is a tie.
+fn tie(row: &Row) -> Option<f64> {
+    let ((h, _), (r, _)) = best(row)?;
+    let lodgen = (row.lodgen.hausdorff, row.lodgen.rms);
+    row.rounding
+        .filter(|&x| rounding::under_rounding(lodgen, (h, r), x))
+}
+
+/// A percentage to two significant digits (`0.00066 %`).
+fn percent(x: f64) -> String {
+    let decimals = if x > 0.0 {
+        (1 - x.log10().floor() as i32).max(0) as usize
+    } else {
+        0
+    };
+    format!("{x:.decimals$} %")
 }
 
 /// Geometric means of lodgen / best peer over the rows (Hausdorff, RMS).
@@ -596,7 +648,12 @@ fn report(rows: &[Row], samples: usize, note: &str, hand: &str) -> String {
          `lodgen_pm::metric`, symmetric, {samples} area samples per direction plus every \
          vertex, in % of the bounding-box diagonal. H = Hausdorff, R = RMS; **bold**: lodgen \
          worse than the best peer; ratio = lodgen / best peer. A peer that stopped more than \
-         1 % above the count is shown in parentheses with its count and not compared.\n\n{note}\n"
+         1 % above the count is shown in parentheses with its count and not compared. A ratio \
+         marked *tie* is a cell where lodgen's and the best peer's H and R are all under the \
+         rounding of the input file's coordinates (±: half the step of its last stored digit, \
+         the largest over the coordinates, in % of the diagonal; `quality/rounding.rs`): \
+         there the gap is the input's noise, not a loss (not bold; it still counts in the \
+         geometric means).\n\n{note}\n"
     );
     let labels = peer_labels();
     let _ = write!(s, "| mesh | level | tris | lodgen H / R |");
@@ -611,7 +668,10 @@ fn report(rows: &[Row], samples: usize, note: &str, hand: &str) -> String {
     let _ = writeln!(s, "---|---|---|");
     for row in rows {
         let b = best(row);
-        let (bh, br) = b.map_or((f64::INFINITY, f64::INFINITY), |x| (x.0 .0, x.1 .0));
+        let (bh, br) = match tie(row) {
+            Some(_) => (f64::INFINITY, f64::INFINITY),
+            None => b.map_or((f64::INFINITY, f64::INFINITY), |x| (x.0 .0, x.1 .0)),
+        };
         let bold = |v: f64, lim: f64, t: String| if v > lim { format!("**{t}**") } else { t };
         let _ = write!(
             s,
@@ -645,12 +705,19 @@ fn report(rows: &[Row], samples: usize, note: &str, hand: &str) -> String {
         }
         match b {
             Some(((h, hl), (r, rl))) => {
-                let _ = writeln!(
-                    s,
-                    " {h:.4} ({hl}) | {r:.5} ({rl}) | {:.2} / {:.2} |",
+                let ratio = format!(
+                    "{:.2} / {:.2}",
                     row.lodgen.hausdorff / h,
                     row.lodgen.rms / r
                 );
+                let ratio = match tie(row) {
+                    Some(x) => format!(
+                        "*tie*: under the input's rounding (±{}) ({ratio})",
+                        percent(x)
+                    ),
+                    None => ratio,
+                };
+                let _ = writeln!(s, " {h:.4} ({hl}) | {r:.5} ({rl}) | {ratio} |");
             }
             None => {
                 let _ = writeln!(s, " – | – | – |");
@@ -671,117 +738,46 @@ fn report(rows: &[Row], samples: usize, note: &str, hand: &str) -> String {
     s
 }
 
-fn plot(path: &Path, meshes: &[&str], rows: &[Row]) -> Result<()> {
-    use plotters::prelude::*;
-    let font_path = std::env::var_os("LODGEN_FONT")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(DEFAULT_FONT));
-    let font = std::fs::read(&font_path)
-        .with_context(|| format!("reading the plot font {}", font_path.display()))?;
-    let font: &'static [u8] = Box::leak(font.into_boxed_slice());
-    plotters::style::register_font("sans-serif", FontStyle::Normal, font)
-        .map_err(|_| anyhow::anyhow!("{} is not a usable font", font_path.display()))?;
-    let cols = meshes.len().max(1) as u32;
-    let (w, h) = (PLOT_PANEL.0 * cols, PLOT_PANEL.1 * 2);
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    let mut labels = vec!["lodgen"];
-    labels.extend(peer_labels());
-    let colours = [
-        RGBColor(214, 39, 40),
-        RGBColor(60, 60, 60),
-        RGBColor(31, 119, 180),
-        RGBColor(44, 160, 44),
-        RGBColor(255, 127, 14),
-        RGBColor(148, 103, 189),
-    ];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let panels = root.split_evenly((2, cols as usize));
-        for (r, metric) in ["Hausdorff", "RMS"].iter().enumerate() {
-            for (col, m) in meshes.iter().enumerate() {
-                let of = |c: &Cell| {
-                    let e = if r == 0 { c.hausdorff } else { c.rms };
-                    e.max(1e-5)
-                };
-                // (tool, triangles, error)
-                let mut pts: Vec<(usize, f64, f64)> = Vec::new();
-                for row in rows.iter().filter(|x| x.mesh == *m) {
-                    pts.push((0, row.lodgen.triangles as f64, of(&row.lodgen)));
-                    for (i, c) in row.peers.iter().enumerate() {
-                        if let Some(c) = c {
-                            pts.push((i + 1, c.triangles.max(1) as f64, of(c)));
-                        }
-                    }
-                }
-                if pts.is_empty() {
-                    continue;
-                }
-                let xs = pts.iter().map(|p| p.1);
-                let (x0, x1) = (
-                    xs.clone().fold(f64::INFINITY, f64::min),
-                    xs.fold(1.0, f64::max),
-                );
-                let ys = pts.iter().map(|p| p.2);
-                let (y0, y1) = (
-                    ys.clone().fold(f64::INFINITY, f64::min),
-                    ys.fold(0.0, f64::max),
-                );
-                let mut chart = ChartBuilder::on(&panels[r * cols as usize + col])
-                    .caption(format!("{m}: {metric} %"), ("sans-serif", 16))
-                    .margin(8)
-                    .x_label_area_size(30)
-                    .y_label_area_size(50)
-                    .build_cartesian_2d(
-                        (x0 * 0.8..x1 * 1.25).log_scale(),
-                        (y0 * 0.7..y1 * 1.4).log_scale(),
-                    )
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
-                chart
-                    .configure_mesh()
-                    .x_desc("triangles")
-                    .x_labels(4)
-                    .y_labels(5)
-                    .label_style(("sans-serif", 11))
-                    .draw()
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
-                for (t, label) in labels.iter().enumerate() {
-                    let mut series: Vec<(f64, f64)> = pts
-                        .iter()
-                        .filter(|p| p.0 == t)
-                        .map(|p| (p.1, p.2))
-                        .collect();
-                    if series.is_empty() {
-                        continue;
-                    }
-                    series.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    let c = colours[t % colours.len()];
-                    let width = if t == 0 { 3 } else { 1 };
-                    let drawn = chart
-                        .draw_series(LineSeries::new(series.clone(), c.stroke_width(width)))
-                        .map_err(|e| anyhow::anyhow!("{e}"))?;
-                    if r == 0 && col == 0 {
-                        drawn.label(*label).legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(3))
-                        });
-                    }
-                    chart
-                        .draw_series(series.iter().map(|&p| Circle::new(p, 3, c.filled())))
-                        .map_err(|e| anyhow::anyhow!("{e}"))?;
-                }
-                if r == 0 && col == 0 {
-                    chart
-                        .configure_series_labels()
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK)
-                        .label_font(("sans-serif", 11))
-                        .position(SeriesLabelPosition::LowerLeft)
-                        .draw()
-                        .map_err(|e| anyhow::anyhow!("{e}"))?;
-                }
-            }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell(triangles: usize, hausdorff: f64, rms: f64) -> Cell {
+        Cell {
+            triangles,
+            hausdorff,
+            rms,
         }
-        root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
     }
-    crate::render::write_png(path, w as usize, h as usize, &buf)
+
+    /// fandisk 50 %: lodgen over Open3D, all four errors under ±0.00066 %.
+    fn fandisk(rounding: Option<f64>) -> Row {
+        let mut peers = vec![Some(cell(6472, 0.0322, 0.0019)); PEERS.len() + 1];
+        peers[2] = Some(cell(6472, 0.000448, 0.0000294));
+        Row {
+            mesh: "fandisk",
+            ratio: 0.5,
+            lodgen: cell(6472, 0.000501, 0.0000324),
+            peers,
+            asked: 6472,
+            rounding,
+        }
+    }
+
+    #[test]
+    fn a_cell_under_the_inputs_rounding_is_a_tie_not_a_loss() {
+        let row = fandisk(Some(0.00066));
+        assert_eq!(tie(&row), Some(0.00066));
+        let md = report(&[row], 1000, "", "");
+        assert!(!md.contains("**0.0005**") && !md.contains("**0.00003**"));
+        assert!(md.contains("*tie*: under the input's rounding (±0.00066 %) (1.12 / 1.10)"));
+        assert!(line(&fandisk(Some(0.00066))).contains("a tie"));
+        // a rounding under lodgen's Hausdorff, or none known: a loss
+        for rounding in [Some(0.0005), None] {
+            let row = fandisk(rounding);
+            assert_eq!(tie(&row), None);
+            let md = report(&[row], 1000, "", "");
+            assert!(md.contains("**0.0005** / **0.00003**") && !md.contains("*tie*: under"));
+        }
+    }
 }
