@@ -27,6 +27,7 @@ mod gltf_in;
 mod meshopt_in;
 mod obj;
 mod obj_parse;
+mod obj_plain;
 mod ply;
 mod ply_binary;
 mod ply_header;

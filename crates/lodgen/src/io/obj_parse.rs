@@ -20,9 +20,9 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::error::{ErrorKind, Location, ReadError};
+use super::obj_plain::{is_space, plain_coords, plain_face, plain_texcoord};
 
-/// "No texture coordinate / normal" in a corner.
-pub(super) const NONE: u32 = u32::MAX;
+pub(super) use super::obj_plain::NONE;
 
 /// The size chunks are cut at (at the next line end).
 pub(super) const CHUNK_BYTES: usize = 1 << 20;
@@ -163,12 +163,18 @@ enum Keyword {
     Other,
 }
 
-fn is_space(b: u8) -> bool {
-    b.is_ascii_whitespace()
-}
-
 /// The line's keyword and the rest of the line after it.
+#[inline]
 fn keyword(line: &[u8]) -> (Keyword, &[u8]) {
+    // the common statements at the line's start first (what the general
+    // scan below gives them too)
+    match line {
+        [b'v', c, ..] if is_space(*c) => return (Keyword::V, &line[1..]),
+        [b'f', c, ..] if is_space(*c) => return (Keyword::F, &line[1..]),
+        [b'v', b'n', c, ..] if is_space(*c) => return (Keyword::Vn, &line[2..]),
+        [b'v', b't', c, ..] if is_space(*c) => return (Keyword::Vt, &line[2..]),
+        _ => {}
+    }
     let start = line
         .iter()
         .position(|&b| !is_space(b))
@@ -285,23 +291,24 @@ impl ChunkParser<'_> {
         let (k, rest) = keyword(line);
         match k {
             Keyword::V => {
-                let p = self.coords::<3>(rest, "vertex coordinate")?;
+                let p = match plain_coords(rest) {
+                    Some(p) => p,
+                    None => self.coords::<3>(rest, "vertex coordinate")?,
+                };
                 self.out.positions.push(p);
             }
             Keyword::Vt => {
-                let mut t = tokens(rest);
-                let u = self.coords::<1>(rest, "texture coordinate")?[0];
-                t.next();
-                let v = match t.next() {
-                    Some(tok) if !tok.starts_with(b"#") => {
-                        self.number(tok, "texture coordinate")?
-                    }
-                    _ => 0.0,
+                let t = match plain_texcoord(rest) {
+                    Some(t) => t,
+                    None => self.texcoord(rest)?,
                 };
-                self.out.texcoords.push([u, 1.0 - v]);
+                self.out.texcoords.push(t);
             }
             Keyword::Vn => {
-                let n = self.coords::<3>(rest, "normal")?;
+                let n = match plain_coords(rest) {
+                    Some(n) => n,
+                    None => self.coords::<3>(rest, "normal")?,
+                };
                 self.out.normals.push(n);
             }
             Keyword::F => self.face(rest)?,
@@ -332,6 +339,18 @@ impl ChunkParser<'_> {
     fn err_at(&self, token: &[u8], kind: ErrorKind) -> ReadError {
         self.bad.set(token.as_ptr() as usize);
         self.err(kind)
+    }
+
+    /// `vt u [v]` as `[u, 1 - v]`.
+    fn texcoord(&self, rest: &[u8]) -> Result<[f32; 2], ReadError> {
+        let mut t = tokens(rest);
+        let u = self.coords::<1>(rest, "texture coordinate")?[0];
+        t.next();
+        let v = match t.next() {
+            Some(tok) if !tok.starts_with(b"#") => self.number(tok, "texture coordinate")?,
+            _ => 0.0,
+        };
+        Ok([u, 1.0 - v])
     }
 
     /// One number token (as `str::parse::<f32>` reads it), finite.
@@ -412,6 +431,23 @@ impl ChunkParser<'_> {
             self.base.vt + self.out.texcoords.len(),
             self.base.vn + self.out.normals.len(),
         );
+        if plain_face(rest, counts, &mut face).is_none() {
+            // the general reading, for the same corners or the line's error
+            face.clear();
+            self.face_corners(rest, counts, &mut face)?;
+        }
+        self.emit_face(&face);
+        self.face = face;
+        Ok(())
+    }
+
+    /// The corners of a face line, each token split at `/`.
+    fn face_corners(
+        &self,
+        rest: &[u8],
+        counts: (usize, usize, usize),
+        face: &mut Vec<[u32; 3]>,
+    ) -> Result<(), ReadError> {
         for corner in tokens(rest).take_while(|t| !t.starts_with(b"#")) {
             let mut parts = corner.split(|&b| b == b'/');
             let v = parts.next().unwrap_or(b"");
@@ -434,6 +470,11 @@ impl ChunkParser<'_> {
                 face.len()
             ))));
         }
+        Ok(())
+    }
+
+    /// A face's corners, fan-triangulated, into the chunk.
+    fn emit_face(&mut self, face: &[[u32; 3]]) {
         let out = &mut self.out;
         // (`vt` / `vn` become lists at the chunk's first corner with one)
         let with_vt = !out.vt.is_empty() || face.iter().any(|c| c[1] != NONE);
@@ -455,8 +496,6 @@ impl ChunkParser<'_> {
                 }
             }
         }
-        self.face = face;
-        Ok(())
     }
 }
 
@@ -467,7 +506,7 @@ fn parse_f32(s: &[u8]) -> Option<f32> {
 }
 
 /// `str::parse::<i64>`: an optional sign, then at least one digit.
-fn parse_i64(s: &[u8]) -> Option<i64> {
+pub(super) fn parse_i64(s: &[u8]) -> Option<i64> {
     let (negative, digits) = match s.first() {
         Some(b'-') => (true, &s[1..]),
         Some(b'+') => (false, &s[1..]),
@@ -601,6 +640,93 @@ mod tests {
             let ours = parse_f32(&s).map(f32::to_bits);
             assert_eq!(ours, text.parse::<f32>().ok().map(f32::to_bits), "{text:?}");
         }
+    }
+
+    /// The face, vertex and texture lines read by the fast paths and by the
+    /// general reading give the same values, or the fast path declines.
+    #[test]
+    fn plain_lines_read_as_the_general_reading() {
+        let path = Path::new("t.obj");
+        let base = Counts {
+            lines: 0,
+            v: 9,
+            vt: 5,
+            vn: 4,
+        };
+        let p = ChunkParser {
+            out: Chunk::default(),
+            path,
+            line: 1,
+            base,
+            face: Vec::new(),
+            bad: Cell::new(0),
+        };
+        let counts = (9, 5, 4);
+        let faces = [
+            " 1 2 3",
+            " 1 2 3 4 # x",
+            " 1/1 2/2 3/3",
+            " 1//1 2//2 3//4",
+            " 1/2/3 4/5/4 -1/-1/-1",
+            " 1/ 2/ 3/",
+            " 1/2/ 2// 3/1/",
+            "\t1 2\t3 ",
+            " 1 2",
+            " 1 2 #3",
+            " 1 2 3#",
+            " 1 2 10",
+            " 0 1 2",
+            " 1 2 -10",
+            " 1/6 2 3",
+            " 1//5 2 3",
+            " 1/x 2 3",
+            " 1/2/3/4 2 3",
+            " +1 2 3",
+            " 1 2 3 -",
+            " 1-2 2 3",
+            " 99999999999999999999 1 2",
+            " 1 2 3 \u{b}4",
+        ];
+        let mut plain_taken = 0;
+        for line in faces {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let general = p.face_corners(line.as_bytes(), counts, &mut b);
+            if plain_face(line.as_bytes(), counts, &mut a).is_some() {
+                plain_taken += 1;
+                assert!(general.is_ok(), "{line:?}");
+                assert_eq!(a, b, "{line:?}");
+            }
+        }
+        assert!(plain_taken >= 8, "{plain_taken}");
+        let coords = [
+            " 1 2 3",
+            " -0.5 +.25 7.",
+            "\t1\t2\t3 4 5",
+            " 1 2",
+            " 1 2 3e1",
+            " 1 2 #",
+            " 1e400 0 0",
+            " 0.000001 1 2 # c",
+            " 1 2 3x",
+        ];
+        for line in coords {
+            if let Some(c) = plain_coords(line.as_bytes()) {
+                let g = p
+                    .coords::<3>(line.as_bytes(), "x")
+                    .map(|c| c.map(f32::to_bits));
+                assert_eq!(
+                    Ok(c.map(f32::to_bits)),
+                    g.map_err(|e| e.to_string()),
+                    "{line:?}"
+                );
+            }
+            let t = plain_texcoord(line.as_bytes()).map(|t| t.map(f32::to_bits));
+            if let Some(t) = t {
+                let g = p.texcoord(line.as_bytes()).map(|t| t.map(f32::to_bits));
+                assert_eq!(Ok(t), g.map_err(|e| e.to_string()), "{line:?}");
+            }
+        }
+        assert!(plain_coords(b" 1 2").is_none() && plain_texcoord(b" 1 #").is_some());
     }
 
     #[test]
