@@ -92,13 +92,37 @@ fn print_columns(id: &str, path: &Path, plain: usize) -> Result<()> {
     Ok(())
 }
 
-/// The time (ms) `bytes` take on the bench's line, one latency included.
-fn line_ms(bytes: usize) -> f64 {
-    LATENCY_MS + bytes as f64 * 8.0 / (MBIT * 1e6) * 1e3
+/// The bench's throttled line: rate and latency per response.
+#[derive(Clone, Copy)]
+struct Line {
+    mbit: f64,
+    latency_ms: f64,
 }
 
-const MBIT: f64 = 10.0;
-const LATENCY_MS: f64 = 50.0;
+impl Line {
+    /// The time (ms) `bytes` take on the line, one latency included.
+    fn ms(self, bytes: usize) -> f64 {
+        self.latency_ms + bytes as f64 * 8.0 / (self.mbit * 1e6) * 1e3
+    }
+}
+
+/// The issue's example line: 10 Mbit/s, 50 ms latency per response.
+const DEFAULT_LINE: Line = Line {
+    mbit: 10.0,
+    latency_ms: 50.0,
+};
+
+const USAGE: &str = "usage: cargo xtask stream-bench [--quick] [--bytes] [--mesh bunny|spot|bunny-1m] [--runs N]
+       [--timeline] [--decode worker|main|both] [--cold] [--mbit RATE] [--latency-ms MS]
+  --quick        the bunny only
+  --bytes        print the stream's columns and sizes, no browser
+  --mesh NAME    one mesh (default: bunny, spot, bunny-1m)
+  --runs N       pairs of alternating plain/progressive loads (default: bunny 9, spot 21, bunny-1m 3)
+  --timeline     where the full-detail time goes past its floor
+  --decode MODE  the loader's stream decoder: worker (default), main, or both alternating
+  --cold         the page loaded anew before each progressive load (decoder JIT cold)
+  --mbit RATE    the line's rate in Mbit/s (default 10)
+  --latency-ms MS  latency per response in ms (default 50)";
 
 /// Pairs of runs per mesh unless `--runs` says otherwise: enough that the
 /// median of a ~100 ms load holds still on a loaded 2-core machine.
@@ -116,14 +140,26 @@ struct Args {
     runs: Option<usize>,
     mesh: Option<String>,
     timeline: bool,
+    line: Line,
     /// stream-bench.mjs's `--decode` and `--cold`, passed on
     pass: Vec<String>,
 }
 
+/// The value after `flag`, a positive number.
+fn positive(flag: &str, v: Option<&String>) -> Result<f64> {
+    let x: f64 = v
+        .with_context(|| format!("{flag} needs a number"))?
+        .parse()
+        .with_context(|| format!("{flag} needs a number"))?;
+    anyhow::ensure!(x.is_finite() && x > 0.0, "{flag} needs a positive number");
+    Ok(x)
+}
+
 /// `--quick`, `--bytes`, `--runs N`, `--mesh NAME`, `--timeline`,
-/// `--decode MODE`, `--cold`.
-fn parse_args(args: &[String]) -> Result<Args> {
+/// `--decode MODE`, `--cold`, `--mbit RATE`, `--latency-ms MS` (see `USAGE`).
+fn parse_args(args: &[String]) -> Result<Option<Args>> {
     let (mut quick, mut bytes_only, mut runs, mut timeline) = (false, false, None, false);
+    let mut line = DEFAULT_LINE;
     let mut mesh = None;
     let mut pass = Vec::new();
     let mut it = args.iter();
@@ -133,6 +169,9 @@ fn parse_args(args: &[String]) -> Result<Args> {
             "--bytes" => bytes_only = true,
             "--timeline" => timeline = true,
             "--cold" => pass.push(a.clone()),
+            "-h" | "--help" => return Ok(None),
+            "--mbit" => line.mbit = positive(a, it.next())?,
+            "--latency-ms" => line.latency_ms = positive(a, it.next())?,
             "--decode" => {
                 let m = it.next().context("--decode needs worker, main or both")?;
                 anyhow::ensure!(
@@ -154,17 +193,18 @@ fn parse_args(args: &[String]) -> Result<Args> {
                 );
                 mesh = Some(m.clone());
             }
-            other => bail!("stream-bench: unknown argument {other:?}"),
+            other => bail!("stream-bench: unknown argument {other:?}\n{USAGE}"),
         }
     }
-    Ok(Args {
+    Ok(Some(Args {
         quick,
         bytes_only,
         runs,
         mesh,
         timeline,
+        line,
         pass,
-    })
+    }))
 }
 
 pub fn run(args: &[String]) -> Result<()> {
@@ -174,8 +214,15 @@ pub fn run(args: &[String]) -> Result<()> {
         runs,
         mesh,
         timeline,
+        line,
         pass,
-    } = parse_args(args)?;
+    } = match parse_args(args)? {
+        Some(a) => a,
+        None => {
+            println!("{USAGE}");
+            return Ok(());
+        }
+    };
     let root = crate::workspace_root();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
@@ -230,9 +277,9 @@ pub fn run(args: &[String]) -> Result<()> {
             .args(&pass)
             .args([
                 "--mbit",
-                &MBIT.to_string(),
+                &line.mbit.to_string(),
                 "--latency-ms",
-                &LATENCY_MS.to_string(),
+                &line.latency_ms.to_string(),
             ])
             .arg("--json")
             .arg(&json)
@@ -243,9 +290,9 @@ pub fn run(args: &[String]) -> Result<()> {
         let plain_bytes = std::fs::metadata(&plain)?.len() as usize;
         let (stream, before) = stream_bytes(&prog)?;
         let floors = [
-            line_ms(plain_bytes),
-            line_ms(before),
-            line_ms(before + stream),
+            line.ms(plain_bytes),
+            line.ms(before),
+            line.ms(before + stream),
         ];
         let ratio = stream as f64 / plain_bytes as f64;
         // `--decode both`: a row per decoder
@@ -261,7 +308,7 @@ pub fn run(args: &[String]) -> Result<()> {
     if bytes_only {
         return Ok(());
     }
-    print_table(&rows, timeline);
+    print_table(&rows, timeline, line);
     Ok(())
 }
 
@@ -273,8 +320,9 @@ fn spread(v: &serde_json::Value, d: usize) -> String {
 
 type Row = (String, serde_json::Value, f64, [f64; 3]);
 
-fn print_table(rows: &[Row], timeline: bool) {
-    println!("\nthrottled line: {MBIT} Mbit/s, {LATENCY_MS} ms latency per response; three.js in headless Chromium; plain and progressive alternately, N pairs");
+fn print_table(rows: &[Row], timeline: bool, line: Line) {
+    let Line { mbit, latency_ms } = line;
+    println!("\nthrottled line: {mbit} Mbit/s, {latency_ms} ms latency per response; three.js in headless Chromium; plain and progressive alternately, N pairs");
     println!(
         "ms: median (min–max) over the runs; ratios: median (min–max) of each pair's own ratio"
     );
