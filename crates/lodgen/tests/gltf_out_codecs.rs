@@ -5,7 +5,7 @@
 mod support;
 
 use lodgen::gltf_out::{write_lods, Compression, WriteOptions};
-use lodgen::scene::{Material, Origin, Primitive, Scene, SourceMesh};
+use lodgen::scene::{Primitive, Scene};
 use serde_json::Value;
 use support::written::*;
 
@@ -21,18 +21,7 @@ fn textured_scene() -> (Scene, lodgen::scene::LodMesh) {
         indices,
         ..Primitive::default()
     };
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "ball".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: vec![Material {
-            name: "m".into(),
-            base_color: Some([0.2, 0.4, 0.6, 1.0]),
-        }],
-        origin: Origin::Flat,
-        warnings: Vec::new(),
-    };
+    let scene = one_mesh_scene("ball", prim.clone(), "m", [0.2, 0.4, 0.6, 1.0]);
     let lod = chain("ball", 0, prim, &[0.5, 0.1]);
     (scene, lod)
 }
@@ -297,18 +286,7 @@ fn attribute_scene() -> (Scene, lodgen::scene::LodMesh) {
         indices,
         ..Primitive::default()
     };
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "ball".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: vec![Material {
-            name: "m".into(),
-            base_color: Some([0.2, 0.4, 0.6, 1.0]),
-        }],
-        origin: Origin::Flat,
-        warnings: Vec::new(),
-    };
+    let scene = one_mesh_scene("ball", prim.clone(), "m", [0.2, 0.4, 0.6, 1.0]);
     let lod = chain("ball", 0, prim, &[0.25]);
     (scene, lod)
 }

@@ -7,7 +7,7 @@ mod support;
 use std::path::Path;
 
 use lodgen::gltf_out::{write_lods, Compression, LevelProblem, WriteError, WriteOptions};
-use lodgen::scene::{LodLevel, LodMesh, Material, Origin, Primitive, Scene, SourceMesh};
+use lodgen::scene::{LodLevel, LodMesh, Origin, Primitive, Scene, SourceMesh};
 use support::written::*;
 
 fn sphere_scene(n: u32) -> (Scene, Primitive) {
@@ -20,18 +20,7 @@ fn sphere_scene(n: u32) -> (Scene, Primitive) {
         indices,
         ..Primitive::default()
     };
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "ball".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: vec![Material {
-            name: "red".into(),
-            base_color: Some([1.0, 0.0, 0.0, 1.0]),
-        }],
-        origin: Origin::Flat,
-        warnings: Vec::new(),
-    };
+    let scene = one_mesh_scene("ball", prim.clone(), "red", [1.0, 0.0, 0.0, 1.0]);
     (scene, prim)
 }
 

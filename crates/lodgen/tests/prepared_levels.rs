@@ -11,7 +11,7 @@ use lodgen::gltf_out::{
     write_lods, write_lods_prepared, Compression, PreparedLevels, WriteOptions,
 };
 use lodgen::lod::{build_lods_isolated, BuildOptions, LevelHook, LevelRequest};
-use lodgen::scene::{Material, Origin, Primitive, Scene, SourceMesh};
+use lodgen::scene::{Material, Primitive, Scene, SourceMesh};
 use support::written::*;
 
 /// A scene of one positions-only torus of `2 · a · b` triangles.
@@ -117,18 +117,7 @@ fn prepared_levels_write_the_same_bytes() {
         indices,
         ..Primitive::default()
     };
-    let scene = Scene {
-        meshes: vec![SourceMesh {
-            name: "ball".into(),
-            primitives: vec![prim.clone()],
-        }],
-        materials: vec![Material {
-            name: "red".into(),
-            base_color: Some([1.0, 0.0, 0.0, 1.0]),
-        }],
-        origin: Origin::Flat,
-        warnings: Vec::new(),
-    };
+    let scene = one_mesh_scene("ball", prim.clone(), "red", [1.0, 0.0, 0.0, 1.0]);
     let lod = chain("ball", 0, prim, &[0.5, 0.1]);
     let compressed = WriteOptions {
         quantize: true,

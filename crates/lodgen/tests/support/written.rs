@@ -7,7 +7,7 @@ use std::path::Path;
 
 use lodgen::coverage::assign_screen_coverages;
 use lodgen::gltf_out::{write_lods, WriteOptions, WriteSummary};
-use lodgen::scene::{LodLevel, LodMesh, Primitive, Scene};
+use lodgen::scene::{LodLevel, LodMesh, Material, Origin, Primitive, Scene, SourceMesh};
 use serde_json::Value;
 
 /// An icosphere of radius `r` around `center`, subdivided `n` times
@@ -20,6 +20,23 @@ pub fn icosphere(n: u32, r: f32, center: [f32; 3]) -> (Vec<[f32; 3]>, Vec<u32>) 
         .map(|p| [0, 1, 2].map(|k| center[k] + r * p[k]))
         .collect();
     (pos, m.indices())
+}
+
+/// A scene of one mesh `name` drawing `prim`, with one material
+/// `material` of colour `base_color` (no transforms, no warnings).
+pub fn one_mesh_scene(name: &str, prim: Primitive, material: &str, base_color: [f32; 4]) -> Scene {
+    Scene {
+        meshes: vec![SourceMesh {
+            name: name.into(),
+            primitives: vec![prim],
+        }],
+        materials: vec![Material {
+            name: material.into(),
+            base_color: Some(base_color),
+        }],
+        origin: Origin::Flat,
+        warnings: Vec::new(),
+    }
 }
 
 /// Spherical UVs in [0, 1].
