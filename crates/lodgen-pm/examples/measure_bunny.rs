@@ -11,15 +11,7 @@ use lodgen_pm::Mesh;
 
 #[path = "common/mod.rs"]
 mod common;
-use common::load_obj;
-
-/// CPU time of the calling thread in ms (Linux), so figures survive a loaded machine.
-fn thread_cpu_ms() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-6)
-}
+use common::{load_obj, thread_cpu_ms};
 
 /// Vertex clustering on a grid of `cells` cells along the longest side: every vertex moves to
 /// the mean of its cell; triangles that lose a corner are dropped.

@@ -14,15 +14,7 @@ use lodgen_pm::{simplify, SimplifyOptions};
 
 #[path = "common/mod.rs"]
 mod common;
-use common::mesh_from_args;
-
-/// CPU time of the calling thread in ms (Linux).
-fn thread_cpu_ms() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-6)
-}
+use common::{mesh_from_args, thread_cpu_ms};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

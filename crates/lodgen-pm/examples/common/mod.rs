@@ -47,3 +47,13 @@ pub fn load_obj(path: &str) -> Mesh {
         triangles,
     }
 }
+
+/// CPU time of the calling thread in ms (Linux; NaN elsewhere), so figures
+/// survive a loaded machine.
+#[allow(dead_code)] // (not every example times itself)
+pub fn thread_cpu_ms() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-6)
+}
