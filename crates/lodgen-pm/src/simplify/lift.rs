@@ -175,6 +175,16 @@ impl Simplifier {
         if let Some(l) = self.lifted.point(v) {
             return l;
         }
+        self.lift_again(v)
+    }
+
+    /// A lifted `v` whose point is not kept (its bit copied by
+    /// `Lifted::set`): the lift recomputed (rare; out of line so that
+    /// `logged_position`'s two common answers inline in the hot loops).
+    #[cold]
+    #[inline(never)]
+    fn lift_again(&self, v: u32) -> [f32; 3] {
+        let p = self.pos[v as usize];
         self.quadric[v as usize].lifted(dv(p)).map_or(p, fv)
     }
 
