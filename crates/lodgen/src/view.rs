@@ -174,6 +174,18 @@ impl ViewData {
     /// Load `path`: a glTF/GLB with `LODGEN_progressive`, or any readable
     /// mesh through the in-memory pipeline.
     pub fn load(path: &Path) -> anyhow::Result<ViewData> {
+        // a file that cannot be opened: one message naming it, which the
+        // caller's `viewing FILE` context joins into one line
+        match std::fs::metadata(path) {
+            Err(e) => anyhow::bail!("{}: {e}", path.display()),
+            Ok(m) if m.is_dir() => anyhow::bail!("{}: is a directory", path.display()),
+            Ok(m) if m.is_file() => {
+                if let Err(e) = std::fs::File::open(path) {
+                    anyhow::bail!("{}: {e}", path.display());
+                }
+            }
+            Ok(_) => {}
+        }
         let name = path
             .file_name()
             .map_or_else(|| "mesh".into(), |n| n.to_string_lossy().into_owned());

@@ -344,3 +344,31 @@ fn a_scene_is_viewed_through_its_node_transforms() {
     let v = volume(&full.positions, &full.triangles);
     assert!((v / (16.0 * sphere) - 1.0).abs() < 0.01, "{v} vs {sphere}");
 }
+
+#[test]
+fn viewing_a_missing_file_or_a_directory_prints_one_line_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["nope.glb", "nope.obj", ""] {
+        let path = dir.path().join(name);
+        for extra in [&[][..], &["--print-levels"][..]] {
+            let out = Command::new(env!("CARGO_BIN_EXE_lodgen"))
+                .arg("view")
+                .args(extra)
+                .arg(&path)
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(1));
+            let err = String::from_utf8_lossy(&out.stderr);
+            let lines: Vec<&str> = err.lines().collect();
+            assert_eq!(lines.len(), 1, "{err}");
+            let want = format!("error: viewing {}: ", path.display());
+            assert!(lines[0].starts_with(&want), "{err}");
+            let why = if name.is_empty() {
+                "is a directory"
+            } else {
+                "(os error 2)"
+            };
+            assert!(lines[0].ends_with(why), "{err}");
+        }
+    }
+}
