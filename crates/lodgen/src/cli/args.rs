@@ -47,8 +47,13 @@ pub struct BuildArgs {
     pub levels: String,
 
     /// Build levels by measured error instead: for each bound (in % of the
-    /// bounding-box diagonal, e.g. "0.1%,0.5%,2%") the coarsest level whose
-    /// measured symmetric Hausdorff distance stays within it.
+    /// bounding-box diagonal, e.g. "0.1%,0.5%,2%") a level whose measured
+    /// symmetric Hausdorff distance stays within it while the level one
+    /// collapse coarser exceeds it, found by binary search over the
+    /// collapse sequence. The error rises in steps (one collapse can move it
+    /// from well under the bound to over it), so the level's error may sit
+    /// far below the bound; where the error is not monotone a coarser level
+    /// may also be within the bound and not be found.
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub max_error: Option<String>,
 
