@@ -42,17 +42,28 @@ fn spawn_blocked(
     cwd: &Path,
     out_dir: &Path,
     out: &str,
+    terminal: Option<&Path>,
 ) -> (std::process::Child, PathBuf, File) {
     // ".{out}.{pid}.lodgen-tmp", the name built in the child without
     // allocating (only async-signal-safe calls between fork and exec)
     let head: Vec<u8> = [out_dir.as_os_str().as_bytes(), b"/.", out.as_bytes(), b"."].concat();
     let tail: &[u8] = b".lodgen-tmp\0";
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_lodgen"));
-    cmd.args(args)
-        .current_dir(cwd)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
+    cmd.args(args).current_dir(cwd).stdin(Stdio::null());
+    match terminal {
+        // (standard output and error on that terminal)
+        Some(t) => {
+            let open = || {
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .custom_flags(libc::O_NOCTTY)
+                    .open(t)
+                    .unwrap()
+            };
+            cmd.stdout(open()).stderr(open())
+        }
+        None => cmd.stdout(Stdio::piped()).stderr(Stdio::piped()),
+    };
     // SAFETY: the closure writes into a stack buffer and calls getpid and
     // mkfifo, both async-signal-safe; it allocates nothing.
     unsafe {
@@ -151,7 +162,7 @@ fn sigint_during_the_write_leaves_no_file() {
         "100%,10%,2%",
     ];
     // the finest level's buffer is the last temporary file written
-    let (child, fifo, _reader) = spawn_blocked(&args, dir.path(), &out, "ico.lod0.bin");
+    let (child, fifo, _reader) = spawn_blocked(&args, dir.path(), &out, "ico.lod0.bin", None);
     let (code, err) = interrupt(child, libc::SIGINT);
     assert_eq!(code, Some(130), "{err}");
     assert!(
@@ -184,7 +195,7 @@ fn sigterm_in_a_batch_keeps_finished_outputs_only() {
         "--levels",
         "50%,10%",
     ];
-    let (child, _fifo, _reader) = spawn_blocked(&args, dir.path(), &out, "b.glb");
+    let (child, _fifo, _reader) = spawn_blocked(&args, dir.path(), &out, "b.glb", None);
     let (code, err) = interrupt(child, libc::SIGTERM);
     assert_eq!(code, Some(143), "{err}");
     assert!(
@@ -219,4 +230,66 @@ fn sigterm_in_a_batch_keeps_finished_outputs_only() {
         ("unchanged".into(), "built".into()),
         "{table}"
     );
+}
+
+/// A pseudo-terminal: the master's descriptor and the slave's path.
+fn pty() -> (File, PathBuf) {
+    use std::os::unix::io::FromRawFd;
+    // SAFETY: posix_openpt returns a new descriptor (checked), which the
+    // File owns from then on; grantpt/unlockpt/ptsname take that
+    // descriptor; ptsname's static buffer is copied out at once.
+    unsafe {
+        let fd = libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY);
+        assert!(fd >= 0);
+        let master = File::from_raw_fd(fd);
+        assert_eq!(libc::grantpt(fd), 0);
+        assert_eq!(libc::unlockpt(fd), 0);
+        let name = libc::ptsname(fd);
+        assert!(!name.is_null());
+        let slave = std::ffi::CStr::from_ptr(name)
+            .to_string_lossy()
+            .into_owned();
+        (master, PathBuf::from(slave))
+    }
+}
+
+/// Ctrl-C while the progress line is drawn on a terminal (the spinner
+/// ticks while the output's write is blocked): the line is cleared, the
+/// message printed, and nothing is drawn after it (the message holds
+/// standard error until the process ends).
+#[test]
+fn nothing_is_drawn_after_the_interrupt_message_on_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = input(dir.path(), "ico.obj");
+    let target = dir.path().join("ico.glb");
+    let (mut master, slave) = pty();
+    // (read all along: a full terminal buffer would block the child's output)
+    let reader = std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        let mut buf = [0u8; 4096];
+        // until EOF, or EIO once no slave is open (Linux)
+        while let Ok(n) = master.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            seen.extend_from_slice(&buf[..n]);
+        }
+        seen
+    });
+    let args = [mesh.to_str().unwrap(), "-o", target.to_str().unwrap()];
+    let (child, _fifo, _r) = spawn_blocked(&args, dir.path(), dir.path(), "ico.glb", Some(&slave));
+    // a few spinner ticks (120 ms) while the write is blocked
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let (code, _) = interrupt(child, libc::SIGINT);
+    let seen = reader.join().unwrap();
+    let text = String::from_utf8_lossy(&seen);
+    assert_eq!(code, Some(130), "{text:?}");
+    assert!(text.contains("writing"), "{text:?}");
+    assert!(
+        text.ends_with(
+            "\r\x1b[2Klodgen: interrupted (SIGINT); removed 1 unfinished output file\r\n"
+        ),
+        "{text:?}"
+    );
+    assert!(!target.exists());
 }
