@@ -88,16 +88,19 @@ pub(super) fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3
     (tris, points)
 }
 
-/// Ranges of at most this many triangles get their binary tree built whole ([`morton_tree_into`]),
-/// collapsed and freed (≈ 2.7 MB of scratch, and ≈ 2.5 MB of nodes before they are moved into
-/// place, per chunk in flight: one per rayon thread); above it [`wide_tree`] finds the few
-/// binary nodes it opens one at a time. So the whole binary tree (≈ 41 bytes a triangle, as
-/// much as the 4-wide nodes) never exists. (2¹⁷ in sessions 23–25, when the chunks were built
-/// one after another straight into place: a mesh just above 2¹⁶, the bunny's 69,451 triangles,
-/// had its corners scanned three more times for the boxes above the chunks, 1.5 % of a bunny
-/// run's instructions; the chunk-sized boxes are memoised now, so it is once more, and its two
-/// chunks are built side by side. The tree is the same for any size.)
-const CHUNK: usize = 1 << 16;
+/// Ranges of at most this many triangles get their binary tree built whole ([`morton_tree`]),
+/// collapsed and freed (≈ 5.4 MB of scratch); above it [`wide_tree`] finds the few binary nodes
+/// it opens one at a time. So the whole binary tree (≈ 41 bytes a triangle, as much as the
+/// 4-wide nodes) never exists. (2¹⁶ until session 23: a mesh just above it, the bunny's 69,451
+/// triangles, had its triangles' corners scanned three more times for the boxes above the
+/// chunks, 1.5 % of a bunny run's instructions; the tree is the same for any size.)
+const CHUNK: usize = 1 << 17;
+
+/// The chunk size of a larger tree, whose chunks are built a few at a time on rayon's threads
+/// ([`insert_chunks`]): each holds its binary tree's scratch and its collapsed nodes until
+/// they are copied in, ≈ 2.3 MB at 2¹⁵ triangles; as many of them at once as there are
+/// threads hold about what one chunk of [`CHUNK`] did (2¹⁷ made bunny-1m's peak 5 % higher).
+const PARALLEL_CHUNK: usize = 1 << 15;
 
 /// The 4-wide query nodes, and what the binary tree they were collapsed from had at its root.
 pub(super) struct Wide {
@@ -117,111 +120,26 @@ struct Range {
     b: Aabb,
 }
 
-/// The 4-wide tree of [`morton_tree_into`]'s binary tree collapsed by [`collapse_into`], node for
+/// The 4-wide tree of [`morton_tree`]'s binary tree collapsed by [`collapse_into`], node for
 /// node (same boxes, children, order and numbering), without building the binary tree whole:
 /// a node of more than [`CHUNK`] triangles is collapsed here, from boxes of binary nodes found
-/// by splitting its range (memoised, a linear scan at most [`CHUNK`] triangles, the same `f32`
+/// by splitting its range (memoised above [`CHUNK`], a linear scan below, the same `f32`
 /// minima and maxima), and a smaller one by building its binary subtree alone. The work list
 /// is a stack, as in the collapse, so a subtree is numbered whole once its root is taken.
 pub(super) fn wide_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3] + Sync) -> Wide {
-    let mut wide = wide_tree_in(codes, corners, CHUNK);
+    let chunk = if codes.len() <= CHUNK {
+        CHUNK
+    } else {
+        PARALLEL_CHUNK
+    };
+    let mut wide = wide_tree_in(codes, corners, chunk);
     for n in &mut wide.nodes {
         n.set_masks();
     }
     wide
 }
 
-/// A subtree of at most the chunk size met by [`upper_walk`]: its slots, its depth, its root's
-/// query index (a placeholder) and its parent's.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Job {
-    first: usize,
-    count: usize,
-    depth: usize,
-    ni: usize,
-    parent: u32,
-}
-
-/// A chunk's subtree collapsed alone: its nodes numbered from its root at 0 (leaf slots
-/// already absolute), its binary tree's levels, and its binary root's box; with the binary
-/// tree's buffer. One per chunk in flight, allocated by the thread that runs the build and
-/// reused (allocated and freed on rayon's workers instead, the 4.4M run's peak was 10 MB
-/// higher: blocks left resident in their allocator arenas).
-struct Built {
-    build: Vec<BuildNode>,
-    nodes: Vec<Node>,
-    levels: usize,
-    root: Aabb,
-}
-
-impl Built {
-    /// Buffers for chunks of up to `chunk` triangles (a binary tree has fewer than twice as
-    /// many nodes, its collapse fewer than as many: the capacity never written is never
-    /// resident).
-    fn with_room(chunk: usize) -> Built {
-        Built {
-            build: Vec::with_capacity(2 * chunk),
-            nodes: Vec::with_capacity(chunk),
-            levels: 0,
-            root: Aabb::EMPTY,
-        }
-    }
-}
-
-/// [`Job`]'s subtree built ([`morton_tree_into`]) and collapsed into `out`'s nodes (its root's
-/// parent left to [`append_built`]: the listing walk numbers nodes otherwise).
-fn build_job(
-    codes: &[u64],
-    corners: &(impl Fn(usize) -> [[f32; 3]; 3] + Sync),
-    job: Job,
-    out: &mut Built,
-) {
-    let Job { first, count, .. } = job;
-    out.levels = morton_tree_into(
-        &codes[first..first + count],
-        |s| corners(first + s),
-        &mut out.build,
-    );
-    out.root = Aabb {
-        min: out.build[0].min,
-        max: out.build[0].max,
-    };
-    out.nodes.clear();
-    out.nodes.push(BLANK);
-    collapse_into(&out.build, &mut out.nodes, 0, NO_NODE, first as u32);
-}
-
-/// Appends `built`'s nodes to `nodes` as [`collapse_into`] would have numbered them there: its
-/// root at the placeholder `ni` under `parent`, the others from `nodes.len()` on.
-fn append_built(nodes: &mut Vec<Node>, built: &Built, ni: usize, parent: u32) {
-    let base = nodes.len();
-    // (local index 0 is the root, at `ni`; local `j > 0` goes to `base + j - 1`)
-    let at = |j: u32| {
-        if j == 0 {
-            ni as u32
-        } else {
-            (base - 1) as u32 + j
-        }
-    };
-    let moved = |local: &Node, root: bool| {
-        let mut node = *local;
-        for c in 0..4 {
-            if node.count[c] == 0 {
-                node.first[c] = at(node.first[c]);
-            }
-        }
-        node.parent = if root { parent } else { at(node.parent) };
-        node
-    };
-    nodes[ni] = moved(&built.nodes[0], true);
-    nodes.extend(built.nodes[1..].iter().map(|n| moved(n, false)));
-}
-
-/// [`wide_tree`] with chunks of at most `chunk` triangles. The walk above the chunks runs
-/// twice: first only to list the chunks in the order it takes them (which depends on the
-/// ranges alone, not on the numbering), then for good, the chunks built a few at a time on
-/// rayon's threads ahead of it, each into nodes of its own moved into place in that order: the
-/// nodes are those of a one-thread build for any thread count.
+/// [`wide_tree`] with chunks of at most `chunk` triangles.
 fn wide_tree_in(
     codes: &[u64],
     corners: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
@@ -234,11 +152,17 @@ fn wide_tree_in(
         b
     };
     let mut memo = std::collections::BTreeMap::new();
+    // (a root of at most `chunk` triangles gets its box from its binary tree below: a scan
+    // of every corner fewer)
+    let mut root_box = if n > chunk || n <= MAX_LEAF {
+        range_box(codes, &scan, &mut memo, chunk, 0, n)
+    } else {
+        Aabb::EMPTY
+    };
     if n <= MAX_LEAF {
-        let b = range_box(codes, &scan, &mut memo, chunk, 0, n);
         let root = (n > 0).then_some(BuildNode {
-            min: b.min,
-            max: b.max,
+            min: root_box.min,
+            max: root_box.max,
             first: 0,
             count: n as u32,
         });
@@ -249,118 +173,45 @@ fn wide_tree_in(
             depth,
         };
     }
-    let mut jobs = Vec::new();
-    let mut dry = Vec::new();
-    upper_walk(codes, &scan, &mut memo, chunk, &mut dry, |job, _| {
-        jobs.push(job);
-        0
-    });
-    drop(dry);
     // (room for more nodes than a Morton tree's 4-wide collapse makes, ≈ 0.3 a triangle)
     let mut nodes = Vec::with_capacity(n / 2);
-    let window = rayon::current_num_threads().clamp(1, jobs.len().max(1));
-    let mut slots: Vec<Built> = (0..window).map(|_| Built::with_room(chunk)).collect();
-    // (jobs `next..` are not built yet; `jobs[taken..next]` are, in `slots[taken - start..]`)
-    let (mut start, mut taken, mut next) = (0, 0, 0);
-    let mut root_box = Aabb::EMPTY;
-    let depth = upper_walk(codes, &scan, &mut memo, chunk, &mut nodes, |job, nodes| {
-        // (the second walk meets the chunks the first one listed, in that order)
-        let listed = jobs.get(taken).map(|j| (j.first, j.count)) == Some((job.first, job.count));
-        if !listed {
-            let mut own = Built::with_room(job.count);
-            build_job(codes, &corners, job, &mut own);
-            append_built(nodes, &own, job.ni, job.parent);
-            return job.depth + own.levels;
-        }
-        if taken == next {
-            use rayon::prelude::*;
-            let end = (next + window).min(jobs.len());
-            jobs[next..end]
-                .par_iter()
-                .zip(&mut slots[..end - next])
-                .for_each(|(&job, slot)| build_job(codes, &corners, job, slot));
-            (start, next) = (next, end);
-        }
-        let built = &slots[taken - start];
-        taken += 1;
-        append_built(nodes, built, job.ni, job.parent);
-        if job.count == n {
-            // (the same `f32` minima and maxima as a scan: see `range_box`)
-            root_box = built.root;
-        }
-        job.depth + built.levels
-    });
-    if n > chunk {
-        root_box = range_box(codes, &scan, &mut memo, chunk, 0, n);
-    }
-    // (not shrunk to fit: a `Node` is 64-byte aligned, and the system allocator shrinks such a
-    // block by copying it, which was the build's peak; the capacity never written is never
-    // resident)
-    let root = Some(BuildNode {
-        min: root_box.min,
-        max: root_box.max,
-        first: 0,
-        count: 0,
-    });
-    Wide { nodes, root, depth }
-}
-
-/// The walk of the binary tree above the chunks (of more than [`MAX_LEAF`] triangles in all),
-/// collapsing it into `nodes`; `on_chunk(job, nodes)` fills a subtree of at most `chunk`
-/// triangles and returns its depth below the root. Returns the tree's depth.
-fn upper_walk(
-    codes: &[u64],
-    scan: &impl Fn(usize, usize) -> Aabb,
-    memo: &mut std::collections::BTreeMap<(usize, usize), Aabb>,
-    chunk: usize,
-    nodes: &mut Vec<Node>,
-    mut on_chunk: impl FnMut(Job, &mut Vec<Node>) -> usize,
-) -> usize {
-    let n = codes.len();
     nodes.push(BLANK);
     let mut depth = 0;
+    let mut jobs = Vec::new();
     let mut work = vec![(0, n, 0, 0, NO_NODE)]; // (first, count, its depth, query index, parent)
     while let Some((first, count, d, ni, parent)) = work.pop() {
+        if count == n && n <= chunk {
+            let (build, levels) = morton_tree(codes, &corners);
+            // (the same `f32` minima and maxima as a scan: see `range_box`)
+            root_box = Aabb {
+                min: build[0].min,
+                max: build[0].max,
+            };
+            collapse_into(&build, &mut nodes, ni, parent, 0);
+            depth = depth.max(d + levels);
+            continue;
+        }
         if count <= chunk {
-            let job = Job {
+            // (built later, several at once: its nodes go where they would have been
+            // appended now, before the nodes pushed after this point)
+            jobs.push(Chunk {
                 first,
                 count,
                 depth: d,
-                ni,
+                root: ni,
                 parent,
-            };
-            depth = depth.max(on_chunk(job, nodes));
+                at: nodes.len(),
+            });
             continue;
         }
-        let range = |first: usize, count: usize, depth: usize, memo: &mut _| Range {
+        let (kids, k) = open_kids(
+            codes,
+            &|f, c, memo| range_box(codes, &scan, memo, chunk, f, c),
+            &mut memo,
             first,
             count,
-            depth,
-            b: range_box(codes, scan, memo, chunk, first, count),
-        };
-        let mid = split_point(&codes[first..first + count]);
-        let mut kids = [range(first, mid, d + 1, memo); 4];
-        kids[1] = range(first + mid, count - mid, d + 1, memo);
-        let mut k = 2;
-        while k < 4 {
-            let open = (0..k)
-                .filter(|&i| kids[i].count > MAX_LEAF)
-                .max_by(|&i, &j| {
-                    (kids[i].b.half_area().total_cmp(&kids[j].b.half_area())).then(j.cmp(&i))
-                });
-            let Some(i) = open else { break };
-            let Range {
-                first,
-                count,
-                depth,
-                ..
-            } = kids[i];
-            let mid = split_point(&codes[first..first + count]);
-            kids.copy_within(i + 1..k, i + 2);
-            kids[i] = range(first, mid, depth + 1, memo);
-            kids[i + 1] = range(first + mid, count - mid, depth + 1, memo);
-            k += 1;
-        }
+            d,
+        );
         let mut node = Node { parent, ..BLANK };
         for (c, kid) in kids[..k].iter().enumerate() {
             for a in 0..3 {
@@ -380,11 +231,183 @@ fn upper_walk(
         }
         nodes[ni] = node;
     }
-    depth
+    if !jobs.is_empty() {
+        let (merged, chunks_depth) = insert_chunks(codes, &corners, nodes, &jobs, n / 2);
+        nodes = merged;
+        depth = depth.max(chunks_depth);
+    }
+    // (not shrunk to fit: a `Node` is 64-byte aligned, and the system allocator shrinks such a
+    // block by copying it, which was the build's peak; the capacity never written is never
+    // resident)
+    let root = Some(BuildNode {
+        min: root_box.min,
+        max: root_box.max,
+        first: 0,
+        count: 0,
+    });
+    Wide { nodes, root, depth }
 }
 
-/// The box of the binary node over slots `first..first + count` (memoised in `memo`): the
-/// union of its two halves' above `chunk` triangles, `scan` below (the same minima and maxima:
+/// The (up to) four children of the node over slots `first..first + count` at depth `d`: its
+/// two halves, then the child of largest area (of more than [`MAX_LEAF`] triangles) opened
+/// into its halves until there are four; `boxed` gives a range's box. Also how many.
+fn open_kids<M>(
+    codes: &[u64],
+    boxed: &impl Fn(usize, usize, &mut M) -> Aabb,
+    memo: &mut M,
+    first: usize,
+    count: usize,
+    d: usize,
+) -> ([Range; 4], usize) {
+    let mut range = |first: usize, count: usize, depth: usize| Range {
+        first,
+        count,
+        depth,
+        b: boxed(first, count, memo),
+    };
+    let mid = split_point(&codes[first..first + count]);
+    let mut kids = [range(first, mid, d + 1); 4];
+    kids[1] = range(first + mid, count - mid, d + 1);
+    let mut k = 2;
+    while k < 4 {
+        let open = (0..k)
+            .filter(|&i| kids[i].count > MAX_LEAF)
+            .max_by(|&i, &j| {
+                (kids[i].b.half_area().total_cmp(&kids[j].b.half_area())).then(j.cmp(&i))
+            });
+        let Some(i) = open else { break };
+        let Range {
+            first,
+            count,
+            depth,
+            ..
+        } = kids[i];
+        let mid = split_point(&codes[first..first + count]);
+        kids.copy_within(i + 1..k, i + 2);
+        kids[i] = range(first, mid, depth + 1);
+        kids[i + 1] = range(first + mid, count - mid, depth + 1);
+        k += 1;
+    }
+    (kids, k)
+}
+
+/// A range of at most the chunk size under the nodes [`wide_tree_in`] opens: its binary tree
+/// is built and collapsed on its own, its root into the placeholder `root` (under `parent`),
+/// its other nodes where the sequential build would have appended them: before the node that
+/// was `at` in the list of nodes above the chunks.
+struct Chunk {
+    first: usize,
+    count: usize,
+    depth: usize,
+    root: usize,
+    parent: u32,
+    at: usize,
+}
+
+/// A chunk's binary tree, its collapsed nodes and its depth.
+type Buffers = (Vec<BuildNode>, Vec<Node>, usize);
+
+/// The nodes above the chunks (`top`, placeholders at the chunks' roots) with the chunks'
+/// nodes inserted where the one-at-a-time build appended them, every index renumbered: the
+/// same nodes, numbering and parents as that build, for any number of threads. The chunks are
+/// built a few at a time on rayon's threads (as many as there are threads: each holds its
+/// binary tree's scratch and its collapsed nodes until they are copied in, in order). Also
+/// the chunks' depth.
+fn insert_chunks(
+    codes: &[u64],
+    corners: &(impl Fn(usize) -> [[f32; 3]; 3] + Sync),
+    top: Vec<Node>,
+    jobs: &[Chunk],
+    capacity: usize,
+) -> (Vec<Node>, usize) {
+    use rayon::prelude::*;
+    // (the buffers are made once and reused: a chunk's own allocations, freed on other
+    // threads, left holes in their allocator arenas that stayed resident under bunny-4m's
+    // peak, +13–25 MB)
+    let build = |(binary, local, depth): &mut Buffers, j: &Chunk| {
+        let range = j.first..j.first + j.count;
+        let levels = morton_tree_into(&codes[range], |s| corners(j.first + s), binary);
+        local.clear();
+        local.push(BLANK);
+        collapse_into(binary, local, 0, NO_NODE, j.first as u32);
+        *depth = j.depth + levels;
+    };
+    let wave = rayon::current_num_threads().clamp(1, jobs.len().max(1));
+    let largest = jobs.iter().map(|j| j.count).max().unwrap_or(0);
+    let mut buffers: Vec<Buffers> = (0..wave)
+        .map(|_| {
+            let binary = Vec::with_capacity(2 * largest.div_ceil(MAX_LEAF));
+            (binary, Vec::with_capacity(largest / 2), 0)
+        })
+        .collect();
+    let mut out: Vec<Node> = Vec::with_capacity(capacity.max(top.len()));
+    let mut final_of = vec![0u32; top.len()];
+    let (mut built, mut used) = (0, 0);
+    let (mut next, mut depth) = (0, 0);
+    for x in 0..=top.len() {
+        while next < jobs.len() && jobs[next].at == x {
+            if used == built {
+                let end = (next + wave).min(jobs.len());
+                (built, used) = (end - next, 0);
+                buffers[..built]
+                    .par_iter_mut()
+                    .zip(&jobs[next..end])
+                    .for_each(|(b, j)| build(b, j));
+            }
+            let (_, local, d) = &buffers[used];
+            used += 1;
+            depth = depth.max(*d);
+            // (local 0 is the chunk's root, placed before; local k ≥ 1 is appended now)
+            let root = final_of[jobs[next].root];
+            let base = out.len() as u32 - 1;
+            let place = |k: u32| if k == 0 { root } else { base + k };
+            for (k, &node) in local.iter().enumerate() {
+                let mut node = node;
+                for c in 0..4 {
+                    if node.count[c] == 0 {
+                        node.first[c] = place(node.first[c]);
+                    }
+                }
+                if k == 0 {
+                    out[root as usize] = node; // its parent: below, with the nodes above
+                } else {
+                    node.parent = place(node.parent);
+                    out.push(node);
+                }
+            }
+            next += 1;
+        }
+        if let Some(node) = top.get(x) {
+            final_of[x] = out.len() as u32;
+            out.push(*node);
+        }
+    }
+    let renumber = |i: u32| {
+        if i == NO_NODE {
+            NO_NODE
+        } else {
+            final_of[i as usize]
+        }
+    };
+    let mut chunk_root = vec![false; top.len()];
+    for j in jobs {
+        chunk_root[j.root] = true;
+        out[final_of[j.root] as usize].parent = renumber(j.parent);
+    }
+    for x in (0..top.len()).filter(|&x| !chunk_root[x]) {
+        let node = &mut out[final_of[x] as usize];
+        for c in 0..4 {
+            if node.count[c] == 0 {
+                node.first[c] = final_of[node.first[c] as usize];
+            }
+        }
+        node.parent = renumber(node.parent);
+    }
+    (out, depth)
+}
+
+/// The box of the binary node over slots `first..first + count`: the union of its two halves'
+/// (memoised in `memo`) above `chunk` triangles, `scan` below (the same minima and maxima:
 /// `f32` min and max keep the first of equal values, as the union of the left half with the
 /// right one does).
 fn range_box(
@@ -395,13 +418,11 @@ fn range_box(
     first: usize,
     count: usize,
 ) -> Aabb {
+    if count <= chunk {
+        return scan(first, count);
+    }
     if let Some(b) = memo.get(&(first, count)) {
         return *b;
-    }
-    if count <= chunk {
-        let b = scan(first, count);
-        memo.insert((first, count), b);
-        return b;
     }
     let mid = split_point(&codes[first..first + count]);
     let mut b = range_box(codes, scan, memo, chunk, first, mid);
@@ -512,15 +533,13 @@ fn collapse_into(
 ///
 /// (Leaves of exactly two consecutive slots instead, 10 % fewer nodes, made 1.5× more box and
 /// 1.8× more triangle tests: a pair across a jump of the curve has a loose box.)
-#[cfg(test)]
 fn morton_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3]) -> (Vec<BuildNode>, usize) {
     let mut nodes = Vec::new();
     let levels = morton_tree_into(codes, corners, &mut nodes);
     (nodes, levels)
 }
 
-/// `morton_tree` (above; the tests' form) into `nodes`, cleared first: returns the number of
-/// levels.
+/// [`morton_tree`] into `nodes` (cleared first; its capacity reused).
 fn morton_tree_into(
     codes: &[u64],
     corners: impl Fn(usize) -> [[f32; 3]; 3],
@@ -624,8 +643,7 @@ mod tests {
     }
 
     /// The chunked build is the whole binary tree's collapse, node for node (boxes, children,
-    /// numbering, parents) and depth, whatever the chunk size and the number of threads building
-    /// the chunks. Fails when a chunk is numbered
+    /// numbering, parents) and depth, whatever the chunk size. Fails when a chunk is numbered
     /// out of the collapse's depth-first order, a box above the chunks is computed otherwise,
     /// or the opening order differs.
     #[test]
@@ -637,20 +655,8 @@ mod tests {
         let (build, depth) = morton_tree(&z.codes, corners);
         let mut whole = vec![BLANK];
         collapse_into(&build, &mut whole, 0, NO_NODE, 0);
-        for (chunk, threads) in [
-            (3, 1),
-            (3, 3),
-            (8, 2),
-            (61, 1),
-            (61, 3),
-            (500, 2),
-            (1 << 20, 2),
-        ] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("a pool");
-            let wide = pool.install(|| wide_tree_in(&z.codes, corners, chunk));
+        for chunk in [3, 8, 61, 500, 1 << 20] {
+            let wide = wide_tree_in(&z.codes, corners, chunk);
             assert_eq!(wide.depth, depth, "chunk {chunk}");
             assert_eq!(wide.nodes.len(), whole.len(), "chunk {chunk}");
             for (i, (a, b)) in wide.nodes.iter().zip(&whole).enumerate() {
