@@ -96,12 +96,6 @@ pub(super) fn leaf_order_indices(mesh: MeshRef<'_>, ids: &[u32]) -> (Vec<[u32; 3
 /// chunks, 1.5 % of a bunny run's instructions; the tree is the same for any size.)
 const CHUNK: usize = 1 << 17;
 
-/// The chunk size of a larger tree, whose chunks are built a few at a time on rayon's threads
-/// ([`insert_chunks`]): each holds its binary tree's scratch and its collapsed nodes until
-/// they are copied in, ≈ 2.3 MB at 2¹⁵ triangles; as many of them at once as there are
-/// threads hold about what one chunk of [`CHUNK`] did (2¹⁷ made bunny-1m's peak 5 % higher).
-const PARALLEL_CHUNK: usize = 1 << 15;
-
 /// The 4-wide query nodes, and what the binary tree they were collapsed from had at its root.
 pub(super) struct Wide {
     pub(super) nodes: Vec<Node>,
@@ -126,13 +120,8 @@ struct Range {
 /// by splitting its range (memoised above [`CHUNK`], a linear scan below, the same `f32`
 /// minima and maxima), and a smaller one by building its binary subtree alone. The work list
 /// is a stack, as in the collapse, so a subtree is numbered whole once its root is taken.
-pub(super) fn wide_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3] + Sync) -> Wide {
-    let chunk = if codes.len() <= CHUNK {
-        CHUNK
-    } else {
-        PARALLEL_CHUNK
-    };
-    let mut wide = wide_tree_in(codes, corners, chunk);
+pub(super) fn wide_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3]) -> Wide {
+    let mut wide = wide_tree_in(codes, corners, CHUNK);
     for n in &mut wide.nodes {
         n.set_masks();
     }
@@ -140,11 +129,7 @@ pub(super) fn wide_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3] 
 }
 
 /// [`wide_tree`] with chunks of at most `chunk` triangles.
-fn wide_tree_in(
-    codes: &[u64],
-    corners: impl Fn(usize) -> [[f32; 3]; 3] + Sync,
-    chunk: usize,
-) -> Wide {
+fn wide_tree_in(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3], chunk: usize) -> Wide {
     let n = codes.len();
     let scan = |first: usize, count: usize| {
         let mut b = Aabb::EMPTY;
@@ -177,41 +162,50 @@ fn wide_tree_in(
     let mut nodes = Vec::with_capacity(n / 2);
     nodes.push(BLANK);
     let mut depth = 0;
-    let mut jobs = Vec::new();
     let mut work = vec![(0, n, 0, 0, NO_NODE)]; // (first, count, its depth, query index, parent)
     while let Some((first, count, d, ni, parent)) = work.pop() {
-        if count == n && n <= chunk {
-            let (build, levels) = morton_tree(codes, &corners);
-            // (the same `f32` minima and maxima as a scan: see `range_box`)
-            root_box = Aabb {
-                min: build[0].min,
-                max: build[0].max,
-            };
-            collapse_into(&build, &mut nodes, ni, parent, 0);
+        if count <= chunk {
+            let (build, levels) = morton_tree(&codes[first..first + count], |s| corners(first + s));
+            if count == n {
+                // (the same `f32` minima and maxima as a scan: see `range_box`)
+                root_box = Aabb {
+                    min: build[0].min,
+                    max: build[0].max,
+                };
+            }
+            collapse_into(&build, &mut nodes, ni, parent, first as u32);
             depth = depth.max(d + levels);
             continue;
         }
-        if count <= chunk {
-            // (built later, several at once: its nodes go where they would have been
-            // appended now, before the nodes pushed after this point)
-            jobs.push(Chunk {
-                first,
-                count,
-                depth: d,
-                root: ni,
-                parent,
-                at: nodes.len(),
-            });
-            continue;
-        }
-        let (kids, k) = open_kids(
-            codes,
-            &|f, c, memo| range_box(codes, &scan, memo, chunk, f, c),
-            &mut memo,
+        let range = |first: usize, count: usize, depth: usize, memo: &mut _| Range {
             first,
             count,
-            d,
-        );
+            depth,
+            b: range_box(codes, &scan, memo, chunk, first, count),
+        };
+        let mid = split_point(&codes[first..first + count]);
+        let mut kids = [range(first, mid, d + 1, &mut memo); 4];
+        kids[1] = range(first + mid, count - mid, d + 1, &mut memo);
+        let mut k = 2;
+        while k < 4 {
+            let open = (0..k)
+                .filter(|&i| kids[i].count > MAX_LEAF)
+                .max_by(|&i, &j| {
+                    (kids[i].b.half_area().total_cmp(&kids[j].b.half_area())).then(j.cmp(&i))
+                });
+            let Some(i) = open else { break };
+            let Range {
+                first,
+                count,
+                depth,
+                ..
+            } = kids[i];
+            let mid = split_point(&codes[first..first + count]);
+            kids.copy_within(i + 1..k, i + 2);
+            kids[i] = range(first, mid, depth + 1, &mut memo);
+            kids[i + 1] = range(first + mid, count - mid, depth + 1, &mut memo);
+            k += 1;
+        }
         let mut node = Node { parent, ..BLANK };
         for (c, kid) in kids[..k].iter().enumerate() {
             for a in 0..3 {
@@ -231,11 +225,6 @@ fn wide_tree_in(
         }
         nodes[ni] = node;
     }
-    if !jobs.is_empty() {
-        let (merged, chunks_depth) = insert_chunks(codes, &corners, nodes, &jobs, n / 2);
-        nodes = merged;
-        depth = depth.max(chunks_depth);
-    }
     // (not shrunk to fit: a `Node` is 64-byte aligned, and the system allocator shrinks such a
     // block by copying it, which was the build's peak; the capacity never written is never
     // resident)
@@ -246,164 +235,6 @@ fn wide_tree_in(
         count: 0,
     });
     Wide { nodes, root, depth }
-}
-
-/// The (up to) four children of the node over slots `first..first + count` at depth `d`: its
-/// two halves, then the child of largest area (of more than [`MAX_LEAF`] triangles) opened
-/// into its halves until there are four; `boxed` gives a range's box. Also how many.
-fn open_kids<M>(
-    codes: &[u64],
-    boxed: &impl Fn(usize, usize, &mut M) -> Aabb,
-    memo: &mut M,
-    first: usize,
-    count: usize,
-    d: usize,
-) -> ([Range; 4], usize) {
-    let mut range = |first: usize, count: usize, depth: usize| Range {
-        first,
-        count,
-        depth,
-        b: boxed(first, count, memo),
-    };
-    let mid = split_point(&codes[first..first + count]);
-    let mut kids = [range(first, mid, d + 1); 4];
-    kids[1] = range(first + mid, count - mid, d + 1);
-    let mut k = 2;
-    while k < 4 {
-        let open = (0..k)
-            .filter(|&i| kids[i].count > MAX_LEAF)
-            .max_by(|&i, &j| {
-                (kids[i].b.half_area().total_cmp(&kids[j].b.half_area())).then(j.cmp(&i))
-            });
-        let Some(i) = open else { break };
-        let Range {
-            first,
-            count,
-            depth,
-            ..
-        } = kids[i];
-        let mid = split_point(&codes[first..first + count]);
-        kids.copy_within(i + 1..k, i + 2);
-        kids[i] = range(first, mid, depth + 1);
-        kids[i + 1] = range(first + mid, count - mid, depth + 1);
-        k += 1;
-    }
-    (kids, k)
-}
-
-/// A range of at most the chunk size under the nodes [`wide_tree_in`] opens: its binary tree
-/// is built and collapsed on its own, its root into the placeholder `root` (under `parent`),
-/// its other nodes where the sequential build would have appended them: before the node that
-/// was `at` in the list of nodes above the chunks.
-struct Chunk {
-    first: usize,
-    count: usize,
-    depth: usize,
-    root: usize,
-    parent: u32,
-    at: usize,
-}
-
-/// A chunk's binary tree, its collapsed nodes and its depth.
-type Buffers = (Vec<BuildNode>, Vec<Node>, usize);
-
-/// The nodes above the chunks (`top`, placeholders at the chunks' roots) with the chunks'
-/// nodes inserted where the one-at-a-time build appended them, every index renumbered: the
-/// same nodes, numbering and parents as that build, for any number of threads. The chunks are
-/// built a few at a time on rayon's threads (as many as there are threads: each holds its
-/// binary tree's scratch and its collapsed nodes until they are copied in, in order). Also
-/// the chunks' depth.
-fn insert_chunks(
-    codes: &[u64],
-    corners: &(impl Fn(usize) -> [[f32; 3]; 3] + Sync),
-    top: Vec<Node>,
-    jobs: &[Chunk],
-    capacity: usize,
-) -> (Vec<Node>, usize) {
-    use rayon::prelude::*;
-    // (the buffers are made once and reused: a chunk's own allocations, freed on other
-    // threads, left holes in their allocator arenas that stayed resident under bunny-4m's
-    // peak, +13–25 MB)
-    let build = |(binary, local, depth): &mut Buffers, j: &Chunk| {
-        let range = j.first..j.first + j.count;
-        let levels = morton_tree_into(&codes[range], |s| corners(j.first + s), binary);
-        local.clear();
-        local.push(BLANK);
-        collapse_into(binary, local, 0, NO_NODE, j.first as u32);
-        *depth = j.depth + levels;
-    };
-    let wave = rayon::current_num_threads().clamp(1, jobs.len().max(1));
-    let largest = jobs.iter().map(|j| j.count).max().unwrap_or(0);
-    let mut buffers: Vec<Buffers> = (0..wave)
-        .map(|_| {
-            let binary = Vec::with_capacity(2 * largest.div_ceil(MAX_LEAF));
-            (binary, Vec::with_capacity(largest / 2), 0)
-        })
-        .collect();
-    let mut out: Vec<Node> = Vec::with_capacity(capacity.max(top.len()));
-    let mut final_of = vec![0u32; top.len()];
-    let (mut built, mut used) = (0, 0);
-    let (mut next, mut depth) = (0, 0);
-    for x in 0..=top.len() {
-        while next < jobs.len() && jobs[next].at == x {
-            if used == built {
-                let end = (next + wave).min(jobs.len());
-                (built, used) = (end - next, 0);
-                buffers[..built]
-                    .par_iter_mut()
-                    .zip(&jobs[next..end])
-                    .for_each(|(b, j)| build(b, j));
-            }
-            let (_, local, d) = &buffers[used];
-            used += 1;
-            depth = depth.max(*d);
-            // (local 0 is the chunk's root, placed before; local k ≥ 1 is appended now)
-            let root = final_of[jobs[next].root];
-            let base = out.len() as u32 - 1;
-            let place = |k: u32| if k == 0 { root } else { base + k };
-            for (k, &node) in local.iter().enumerate() {
-                let mut node = node;
-                for c in 0..4 {
-                    if node.count[c] == 0 {
-                        node.first[c] = place(node.first[c]);
-                    }
-                }
-                if k == 0 {
-                    out[root as usize] = node; // its parent: below, with the nodes above
-                } else {
-                    node.parent = place(node.parent);
-                    out.push(node);
-                }
-            }
-            next += 1;
-        }
-        if let Some(node) = top.get(x) {
-            final_of[x] = out.len() as u32;
-            out.push(*node);
-        }
-    }
-    let renumber = |i: u32| {
-        if i == NO_NODE {
-            NO_NODE
-        } else {
-            final_of[i as usize]
-        }
-    };
-    let mut chunk_root = vec![false; top.len()];
-    for j in jobs {
-        chunk_root[j.root] = true;
-        out[final_of[j.root] as usize].parent = renumber(j.parent);
-    }
-    for x in (0..top.len()).filter(|&x| !chunk_root[x]) {
-        let node = &mut out[final_of[x] as usize];
-        for c in 0..4 {
-            if node.count[c] == 0 {
-                node.first[c] = final_of[node.first[c] as usize];
-            }
-        }
-        node.parent = renumber(node.parent);
-    }
-    (out, depth)
 }
 
 /// The box of the binary node over slots `first..first + count`: the union of its two halves'
@@ -534,21 +365,9 @@ fn collapse_into(
 /// (Leaves of exactly two consecutive slots instead, 10 % fewer nodes, made 1.5× more box and
 /// 1.8× more triangle tests: a pair across a jump of the curve has a loose box.)
 fn morton_tree(codes: &[u64], corners: impl Fn(usize) -> [[f32; 3]; 3]) -> (Vec<BuildNode>, usize) {
-    let mut nodes = Vec::new();
-    let levels = morton_tree_into(codes, corners, &mut nodes);
-    (nodes, levels)
-}
-
-/// [`morton_tree`] into `nodes` (cleared first; its capacity reused).
-fn morton_tree_into(
-    codes: &[u64],
-    corners: impl Fn(usize) -> [[f32; 3]; 3],
-    nodes: &mut Vec<BuildNode>,
-) -> usize {
-    nodes.clear();
     let n = codes.len();
     if n == 0 {
-        return 0;
+        return (Vec::new(), 0);
     }
     let blank = BuildNode {
         min: [0.0; 3],
@@ -556,7 +375,7 @@ fn morton_tree_into(
         first: 0,
         count: 0,
     };
-    nodes.reserve(2 * n.div_ceil(MAX_LEAF));
+    let mut nodes: Vec<BuildNode> = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF));
     nodes.push(blank);
     let mut max_depth = 0;
     // Work list of (node index, first slot, slot count, depth); explicit, so a badly
@@ -602,7 +421,7 @@ fn morton_tree_into(
             nodes[i].max = b.max;
         }
     }
-    max_depth
+    (nodes, max_depth)
 }
 
 #[cfg(test)]
