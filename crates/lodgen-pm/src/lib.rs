@@ -90,12 +90,24 @@ pub fn simplify(
     indices: &[u32],
     opts: &SimplifyOptions,
 ) -> Result<Simplified, MeshError> {
-    let out = simplify_once(positions, indices, opts)?;
+    simplify_metered(positions, indices, opts, None)
+}
+
+/// [`simplify()`], reporting to `meter` as [`simplify_with_wedges_metered`]
+/// does, and stopping with [`StopReason::Cancelled`] once it is
+/// [cancelled](Meter::cancel).
+pub fn simplify_metered(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
+) -> Result<Simplified, MeshError> {
+    let out = simplify_once(positions, indices, opts, meter.clone())?;
     if !short_on_topology(opts, &out) {
         return Ok(out);
     }
     drop(out);
-    simplify_once(positions, indices, &again(opts))
+    simplify_once(positions, indices, &again(opts), meter)
 }
 
 /// Whether [`TopologyChange::WhenShort`] runs again: the run stopped above
@@ -117,9 +129,13 @@ fn simplify_once(
     positions: &[[f32; 3]],
     indices: &[u32],
     opts: &SimplifyOptions,
+    meter: Option<std::sync::Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
     let prepared = prepare(positions, indices)?;
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
+    if let Some(m) = meter {
+        s.set_meter(m);
+    }
     let stop = s.run();
     let (pm, stats) = s.finish();
     Ok(Simplified {

@@ -18,12 +18,13 @@
 use crate::cli::{self, BuildArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use lodgen_pm::Meter;
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::manifest::Running;
@@ -480,7 +481,7 @@ pub fn run_batch(
     args: &BuildArgs,
     on_done: &(dyn Fn(usize, &FileOutcome) + Sync),
 ) -> Result<BatchOutcome> {
-    let outcome = run_batch_watched(inputs, out_dir, args, &|_| {}, on_done)?;
+    let outcome = run_batch_watched(inputs, out_dir, args, &|_| {}, on_done, None)?;
     if let Some(e) = &outcome.manifest_error {
         bail!("{e}");
     }
@@ -490,12 +491,16 @@ pub fn run_batch(
 /// [`run_batch`], with `on_start` called as each file begins (from worker
 /// threads); a manifest that cannot be written is not an error here but
 /// [`BatchOutcome::manifest_error`] ([`run_batch`] returns it as one).
+/// Every file's simplification reports to `meter` when given; once it is
+/// [cancelled](Meter::cancel) no file starts, and the files being built
+/// stop (failed, "cancelled").
 pub fn run_batch_watched(
     inputs: &[BatchInput],
     out_dir: &Path,
     args: &BuildArgs,
     on_start: &(dyn Fn(&BatchInput) + Sync),
     on_done: &(dyn Fn(usize, &FileOutcome) + Sync),
+    meter: Option<Arc<Meter>>,
 ) -> Result<BatchOutcome> {
     let t0 = Instant::now();
     // Options are checked once, before any file: a bad flag is not a
@@ -530,12 +535,16 @@ pub fn run_batch_watched(
             .build()
             .context("starting a worker's thread pool")?;
         loop {
+            if meter.as_ref().is_some_and(|m| m.is_cancelled()) {
+                return Ok(());
+            }
             let Some(&k) = order.get(next.fetch_add(1, Ordering::Relaxed)) else {
                 return Ok(());
             };
             let item = &inputs[k];
             on_start(item);
-            let outcome = pool.install(|| one_file(item, out_dir, args, &manifest, &options_hash));
+            let file = (&manifest, options_hash.as_str(), meter.clone());
+            let outcome = pool.install(|| one_file(item, out_dir, args, file));
             if let (Status::Built, Some((k, e))) = (&outcome.status, &outcome.entry) {
                 running.built(k, e);
             }
@@ -590,12 +599,13 @@ pub fn run_batch_watched(
     })
 }
 
+/// One file of the batch, with the batch's manifest and options hash, and
+/// its meter.
 fn one_file(
     item: &BatchInput,
     out_dir: &Path,
     args: &BuildArgs,
-    manifest: &Manifest,
-    options_hash: &str,
+    (manifest, options_hash, meter): (&Manifest, &str, Option<Arc<Meter>>),
 ) -> FileOutcome {
     let t0 = Instant::now();
     let output = out_dir.join(&item.relative_output);
@@ -614,7 +624,7 @@ fn one_file(
             std::fs::create_dir_all(parent)
                 .with_context(|| format!("creating {}", parent.display()))?;
         }
-        let built = cli::build_file(&item.input, &output, args, &mut |_| {})?;
+        let built = cli::build_file_metered(&item.input, &output, args, &mut |_| {}, meter)?;
         let report = built.report_json(&item.input);
         let entry = ManifestEntry {
             input: item.input.display().to_string(),
@@ -728,7 +738,7 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
             }
         }
     };
-    let outcome = run_batch_watched(&inputs, out_dir, args, &on_start, &on_done);
+    let outcome = run_batch_watched(&inputs, out_dir, args, &on_start, &on_done, None);
     if let Some(l) = line {
         l.finish();
     }

@@ -6,7 +6,11 @@
 //!
 //! Every call copies its NumPy inputs, then releases the GIL
 //! (`Python::detach`) for the work. Errors raise `lodgen.LodgenError` (a
-//! `ValueError`) with the CLI's message, causes joined by ": ".
+//! `ValueError`) with the CLI's message, causes joined by ": ". The long
+//! calls (`simplify`, `progressive`, `build`, `batch`) run their work on a
+//! thread of their own while the calling thread keeps running Python's
+//! signal handlers ([`interruptible`]): Ctrl-C raises `KeyboardInterrupt`
+//! within moments instead of after the work, and stops the work.
 
 use crate::cli::{self, BuildArgs};
 use crate::lod;
@@ -19,6 +23,9 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::mpsc::{channel, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::Duration;
 
 pyo3::create_exception!(
     lodgen,
@@ -49,6 +56,51 @@ fn parse(argv: Vec<String>) -> PyResult<BuildArgs> {
 /// ([`crate::cli::error_line`]).
 fn error(e: anyhow::Error) -> PyErr {
     LodgenError::new_err(crate::cli::error_line(&e))
+}
+
+/// How often a long call's waiting thread runs Python's signal handlers.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Runs `work` with the GIL released (as `py.detach` does) on a thread of
+/// its own, while this thread runs Python's signal handlers every
+/// [`SIGNAL_POLL`] (`PyErr_CheckSignals`, which does so on the main thread
+/// only). The first exception a handler raises (`KeyboardInterrupt` on
+/// Ctrl-C) cancels `meter` — the simplification stops at its next batch
+/// or round, the build before its next phase, a batch before its next
+/// file — and is raised once `work` has returned, whatever it returned.
+fn interruptible<T, F>(py: Python<'_>, meter: &lodgen_pm::Meter, work: F) -> PyResult<T>
+where
+    F: FnOnce() -> T + Send,
+    T: Send,
+{
+    py.detach(|| {
+        std::thread::scope(|s| {
+            let (done, finished) = channel::<()>();
+            // (the stack of a main thread: the work ran on the caller's)
+            let worker = std::thread::Builder::new()
+                .stack_size(8 << 20)
+                .spawn_scoped(s, move || {
+                    let out = work();
+                    let _ = done.send(());
+                    out
+                })
+                .map_err(|e| LodgenError::new_err(format!("starting a thread: {e}")))?;
+            let mut raised = None;
+            // (a panic drops `done`: Disconnected, then join passes it on)
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
+                if raised.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        meter.cancel();
+                        raised = Some(e);
+                    }
+                }
+            }
+            let out = worker
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
+            raised.map_or(Ok(out), Err)
+        })
+    })
 }
 
 type Arrays<'py> = (
@@ -159,21 +211,22 @@ fn simplify<'py>(
         }],
         ..Scene::default()
     };
-    let build = py
-        .detach(|| -> anyhow::Result<lod::MeshBuild> {
-            let opts = args.build_options()?;
-            if opts.measured {
-                cli::check_sample_count(&opts.measure, triangles, triangles)?;
-            }
-            let builds = lod::build_lods(&scene, &opts, &mut |_| {})
-                .map_err(anyhow::Error::from)
-                .map_err(|e| e.context("simplifying"))?;
-            builds
-                .into_iter()
-                .next()
-                .ok_or_else(|| anyhow::anyhow!("simplifying: the mesh has no triangles"))
-        })
-        .map_err(error)?;
+    let meter = Arc::new(lodgen_pm::Meter::default());
+    let build = interruptible(py, &meter, || -> anyhow::Result<lod::MeshBuild> {
+        let mut opts = args.build_options()?;
+        opts.meter = Some(Arc::clone(&meter));
+        if opts.measured {
+            cli::check_sample_count(&opts.measure, triangles, triangles)?;
+        }
+        let builds = lod::build_lods(&scene, &opts, &mut |_| {})
+            .map_err(anyhow::Error::from)
+            .map_err(|e| e.context("simplifying"))?;
+        builds
+            .into_iter()
+            .next()
+            .ok_or_else(|| anyhow::anyhow!("simplifying: the mesh has no triangles"))
+    })?
+    .map_err(error)?;
     let mut levels = Vec::new();
     for ((l, e), s) in build
         .lod
@@ -229,16 +282,17 @@ fn progressive<'py>(
 ) -> PyResult<PyProgressiveMesh> {
     let args = parse(argv)?;
     let (positions, indices) = mesh_in(&vertices, &faces)?;
-    let s = py
-        .detach(|| -> anyhow::Result<lodgen_pm::Simplified> {
-            let mut opts = args.build_options()?.simplify;
-            if let Some(t) = target_triangles {
-                opts = opts.with_target_triangles(t);
-            }
-            lodgen_pm::simplify(&positions, &indices, &opts)
-                .map_err(|e| anyhow::Error::from(e).context("simplifying"))
-        })
-        .map_err(error)?;
+    let meter = Arc::new(lodgen_pm::Meter::default());
+    let s = interruptible(py, &meter, || -> anyhow::Result<lodgen_pm::Simplified> {
+        let mut opts = args.build_options()?.simplify;
+        if let Some(t) = target_triangles {
+            opts = opts.with_target_triangles(t);
+        }
+        let m = Some(Arc::clone(&meter));
+        lodgen_pm::simplify_metered(&positions, &indices, &opts, m)
+            .map_err(|e| anyhow::Error::from(e).context("simplifying"))
+    })?
+    .map_err(error)?;
     Ok(PyProgressiveMesh::new(s.pm, s.vertex_map, s.triangle_map))
 }
 
@@ -292,11 +346,13 @@ fn build(
 ) -> PyResult<String> {
     let args = parse(argv)?;
     let output = output.unwrap_or_else(|| cli::default_output(&input));
-    py.detach(|| -> anyhow::Result<String> {
+    let meter = Arc::new(lodgen_pm::Meter::default());
+    interruptible(py, &meter, || -> anyhow::Result<String> {
         if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(parent)?;
         }
-        let run = || cli::build_file(&input, &output, &args, &mut |_| {});
+        let m = || Some(Arc::clone(&meter));
+        let run = || cli::build_file_metered(&input, &output, &args, &mut |_| {}, m());
         let built = match threads {
             Some(n) => rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
@@ -308,7 +364,7 @@ fn build(
             cli::write_report(path, &built.report_json(&input))?;
         }
         Ok(serde_json::to_string(&built.report_json(&input))?)
-    })
+    })?
     .map_err(error)
 }
 
@@ -324,14 +380,20 @@ fn batch(
     let mut args = parse(argv)?;
     args.inputs = inputs;
     args.batch.out_dir = Some(out_dir.clone());
-    py.detach(|| -> anyhow::Result<String> {
+    let meter = Arc::new(lodgen_pm::Meter::default());
+    interruptible(py, &meter, || -> anyhow::Result<String> {
         if args.batch.jobs == 0 {
             anyhow::bail!("--jobs must be at least 1");
         }
         let inputs = crate::batch::expand_inputs(&args.inputs, Some(&out_dir))?;
-        let outcome = crate::batch::run_batch(&inputs, &out_dir, &args, &|_, _| {})?;
+        let m = Some(Arc::clone(&meter));
+        let outcome =
+            crate::batch::run_batch_watched(&inputs, &out_dir, &args, &|_| {}, &|_, _| {}, m)?;
+        if let Some(e) = &outcome.manifest_error {
+            anyhow::bail!("{e}");
+        }
         Ok(serde_json::to_string(&outcome.report_json())?)
-    })
+    })?
     .map_err(error)
 }
 

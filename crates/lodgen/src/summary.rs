@@ -123,6 +123,7 @@ pub fn stop_words(stop: StopReason) -> &'static str {
         StopReason::Target => "reached the target",
         StopReason::MaxError => "every remaining contraction exceeds the error bound",
         StopReason::Exhausted => "no legal contraction is left",
+        StopReason::Cancelled => "cancelled",
     }
 }
 

@@ -1,8 +1,9 @@
-//! [`Meter`]: how far a run has got, for a progress display. The core never
-//! prints; a caller shares a `Meter` with the run and reads it from another
-//! thread (relaxed atomics: a snapshot may be a step behind).
+//! [`Meter`]: how far a run has got, for a progress display, and a way to
+//! stop it. The core never prints; a caller shares a `Meter` with the run
+//! and reads it from another thread (relaxed atomics: a snapshot may be a
+//! step behind), or [cancels](Meter::cancel) the run from there.
 
-use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU8, AtomicUsize, Ordering::Relaxed};
 
 /// What a metered simplification is doing now.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +30,7 @@ pub struct Meter {
     start: AtomicUsize,
     target: AtomicUsize,
     live: AtomicUsize,
+    cancelled: AtomicBool,
 }
 
 impl Meter {
@@ -67,6 +69,20 @@ impl Meter {
             Stage::Clustering => 4,
         };
         self.stage.store(v, Relaxed);
+    }
+
+    /// Asks the runs sharing this meter to stop: a QEM run stops between
+    /// batches of its walk and between rounds of its clusters, with
+    /// [`crate::StopReason::Cancelled`] (its log so far is still a valid
+    /// chain). What the run was given stays cancelled: a meter is not
+    /// reset.
+    pub fn cancel(&self) {
+        self.cancelled.store(true, Relaxed);
+    }
+
+    /// Whether [`Meter::cancel`] was called.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancelled.load(Relaxed)
     }
 
     pub(crate) fn begin(&self, live: usize, target: usize) {
@@ -132,6 +148,56 @@ mod tests {
         assert_eq!(meter.stage(), Stage::Contracting);
         let f = meter.fraction().unwrap();
         assert!(f > 0.5 && f < 1.0, "{f}");
+    }
+
+    /// A cancelled meter stops the walk and the clustered rounds before
+    /// they contract anything, and the log stays a valid chain.
+    #[test]
+    fn a_cancelled_meter_stops_the_run() {
+        let wavy = |x: f64, y: f64| 0.1 * (7.0 * x).sin() * (5.0 * y).cos();
+        for partition in [None, Some(400)] {
+            let mesh = shapes::grid(120, 120, wavy);
+            let opts = SimplifyOptions::DEFAULT
+                .with_target_ratio(0.015)
+                .with_partition(partition);
+            let mut s = Simplifier::new(&mesh, &opts).unwrap();
+            let start = s.live_tris;
+            let meter = Arc::new(Meter::default());
+            meter.cancel();
+            assert!(meter.is_cancelled());
+            s.set_meter(Arc::clone(&meter));
+            assert_eq!(s.run(), StopReason::Cancelled, "{partition:?}");
+            assert_eq!(s.live_tris, start, "{partition:?}");
+            let (pm, _) = s.finish();
+            assert_eq!(pm.mesh_at_splits(pm.len()).triangles.len(), start);
+        }
+    }
+
+    /// Cancelled from another thread while it runs, a walk stops short of
+    /// its target (the meter is polled after every batch).
+    #[test]
+    fn a_meter_cancelled_mid_run_stops_it_early() {
+        let mesh = shapes::icosphere(7); // 327,680 triangles
+        let opts = SimplifyOptions::DEFAULT
+            .with_target_triangles(100)
+            .with_partition(None);
+        let mut s = Simplifier::new(&mesh, &opts).unwrap();
+        let meter = Arc::new(Meter::default());
+        s.set_meter(Arc::clone(&meter));
+        let watcher = Arc::clone(&meter);
+        let stop = std::thread::scope(|scope| {
+            scope.spawn(move || {
+                while watcher.fraction().is_none_or(|f| f < 0.2) {
+                    std::thread::yield_now();
+                }
+                watcher.cancel();
+            });
+            s.run()
+        });
+        // (the run may only reach its target if it got there before the
+        // watcher saw 20 %: it cannot, a batch is far smaller than 80 %)
+        assert_eq!(stop, StopReason::Cancelled);
+        assert!(s.live_tris > 100, "{}", s.live_tris);
     }
 
     #[test]

@@ -406,6 +406,10 @@ impl Simplifier {
                 m.set_live(self.live_tris);
             }
         }
+        if meter.as_ref().is_some_and(|m| m.is_cancelled()) {
+            self.stats.time.collapse += t0.elapsed();
+            return StopReason::Cancelled;
+        }
         // (batched on one thread too: the walk then plans a batch ahead
         // with its prefetches, 10 % less CPU time than step by step)
         let batched = matches!(self.opts.schedule, Schedule::Passes { .. });
@@ -416,6 +420,9 @@ impl Simplifier {
             };
             if let Some(m) = &meter {
                 m.set_live(self.live_tris);
+                if step.is_ok() && m.is_cancelled() {
+                    break StopReason::Cancelled;
+                }
             }
             if let Err(r) = step {
                 break r;

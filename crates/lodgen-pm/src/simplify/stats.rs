@@ -119,6 +119,8 @@ pub enum StopReason {
     /// No legal candidate is left (all locked or every contraction
     /// illegal) before the target: the stats say why.
     Exhausted,
+    /// The run's [`crate::Meter`] was cancelled.
+    Cancelled,
 }
 
 /// A read-only view of the simplifier's current mesh, in the welded input's

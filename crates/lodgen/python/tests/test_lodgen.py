@@ -273,6 +273,49 @@ def test_the_gil_is_released_during_a_long_simplify():
     assert during["ticks"] > 10000, during
 
 
+def write_binary_ply(path, vertices, faces):
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(vertices)}\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        f"element face {len(faces)}\n"
+        "property list uchar int vertex_indices\nend_header\n"
+    )
+    face = np.dtype([("n", "u1"), ("i", "<i4", (3,))])
+    rows = np.empty(len(faces), dtype=face)
+    rows["n"] = 3
+    rows["i"] = faces
+    with open(path, "wb") as f:
+        f.write(header.encode())
+        f.write(np.asarray(vertices, dtype="<f4").tobytes())
+        f.write(rows.tobytes())
+
+
+def test_ctrl_c_stops_a_long_build_and_writes_nothing(tmp_path):
+    # A build of a 1.3M-triangle torus takes seconds; Ctrl-C (simulated:
+    # _thread.interrupt_main) 0.3 s in must raise KeyboardInterrupt from the
+    # call and stop the work, so the output never appears. (Were the work
+    # left to finish, the file would be written before the exception.)
+    import _thread
+
+    v, f = torus(n=1152, m=576)
+    src = tmp_path / "big.ply"
+    write_binary_ply(src, v, f)
+    out = tmp_path / "big.glb"
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            lodgen.build(src, out, levels=[0.5, 0.1])
+    finally:
+        timer.cancel()
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["big.ply"], "no temporary file left"
+    # the next call is not cancelled
+    small = lodgen.simplify(*torus(), levels=[0.5])
+    assert len(small.levels[0].faces) == len(torus()[1]) // 2
+
+
 def test_read_gives_the_arrays_the_command_reads(tmp_path):
     v, f = torus(n=12, m=6)
     write_obj(tmp_path / "t.obj", v, f)

@@ -130,7 +130,7 @@ pub fn build_lods_isolated(
         let m = &scene.meshes[i];
         match built {
             Ok(b) => out.builds.push(b),
-            Err(BuildError::NoLevels) => return Err(BuildError::NoLevels),
+            Err(e @ (BuildError::NoLevels | BuildError::Cancelled)) => return Err(e),
             Err(e) => {
                 out.warnings.push(Warning::new(
                     format!("meshes[{i}] (mesh `{}`)", m.name),
@@ -256,6 +256,32 @@ fn restore_input(mesh: &mut Cow<'_, SourceMesh>, full: &Mesh) {
 /// (at 4.4M triangles those were the run's peak).
 const SIDE_BY_SIDE_MAX_TRIANGLES: usize = TRIM_MIN_TRIANGLES;
 
+/// The value of a level step's `Result`, or (`freed`: a mesh whose input
+/// was freed and whose levels then fail is written as its welded input) the
+/// input rebuilt from `full` and the error returned.
+macro_rules! or_restore {
+    ($e:expr, $freed:expr, $mesh:expr, $full:expr) => {
+        match $e {
+            Ok(x) => x,
+            Err(e) => {
+                if $freed {
+                    restore_input($mesh, $full);
+                }
+                return Err(e);
+            }
+        }
+    };
+}
+
+/// `Err(Cancelled)` once the build's meter is cancelled (checked after the
+/// simplification, which stops early then, and before the measurement).
+fn go_on(opts: &BuildOptions) -> Result<(), BuildError> {
+    match &opts.meter {
+        Some(m) if m.is_cancelled() => Err(BuildError::Cancelled),
+        _ => Ok(()),
+    }
+}
+
 /// [`build_one`]; an owned `mesh` has its input positions and indices
 /// freed once they are no longer read, unless [`BuildOptions::keep_input`].
 fn build_mesh(
@@ -292,24 +318,10 @@ fn build_mesh(
         (simplified, early, flat)
     };
     let simplify_time = t_build.elapsed();
+    go_on(opts)?;
     return_freed_memory(input_triangles);
     let pm = &simplified.pm;
     let mut full = pm.mesh_at_splits(pm.len());
-    // (a mesh whose input was freed and whose levels then fail is written
-    // as its welded input: the input is rebuilt from `full`)
-    macro_rules! or_restore {
-        ($e:expr, $full:expr) => {
-            match $e {
-                Ok(x) => x,
-                Err(e) => {
-                    if freed {
-                        restore_input(mesh, $full);
-                    }
-                    return Err(e);
-                }
-            }
-        };
-    }
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
     if let Some((r, took)) = early.and_then(|e| e.renumbered(pm, &full)) {
         measurer.set_reference(r, took);
@@ -323,10 +335,10 @@ fn build_mesh(
         })
     };
     let selected = select_splits(pm, opts, &measurer, &mut measuring);
-    let (splits, notes) = or_restore!(selected, &full);
+    let (splits, notes) = or_restore!(selected, freed, mesh, &full);
     let what = (side_by_side, freed);
     let extracted = extract_all(mesh, &flat, &simplified, &splits, opts, &measurer, what);
-    let extracted = or_restore!(extracted, &full);
+    let extracted = or_restore!(extracted, freed, mesh, &full);
     drop(flat);
     if let (false, false, Cow::Owned(m)) = (freed, opts.keep_input, &mut *mesh) {
         if measurable(&full, &extracted) {
@@ -346,6 +358,7 @@ fn build_mesh(
         }
         None => (&full, measurer),
     };
+    go_on(opts)?;
     let ready = opts.level_ready.as_ref().map(|h| (h, index));
     let measured = measure_levels(
         extracted,
@@ -356,7 +369,7 @@ fn build_mesh(
         (side_by_side, ready),
         &mut measuring,
     );
-    let (lod_levels, errors) = or_restore!(measured, full);
+    let (lod_levels, errors) = or_restore!(measured, freed, mesh, full);
     let measure_time = measurer.time();
     drop(measurer);
     Ok(MeshBuild {

@@ -21,4 +21,7 @@ pub enum BuildError {
     },
     #[error("no levels requested")]
     NoLevels,
+    /// [`super::BuildOptions::meter`] was cancelled ([`lodgen_pm::Meter::cancel`]).
+    #[error("cancelled")]
+    Cancelled,
 }

@@ -476,7 +476,7 @@ fn rounds(
     meter: Option<&Meter>,
 ) {
     for _ in 0..MAX_ROUNDS {
-        if live <= stop {
+        if live <= stop || meter.is_some_and(Meter::is_cancelled) {
             break;
         }
         let removed = round(locals, live, live - target, live - stop, factor, meter);
