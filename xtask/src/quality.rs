@@ -35,7 +35,7 @@
 //! polishes lodgen's levels as `lodgen --polish` does
 //! (`lodgen_pm::polish_clusters`, `PolishOptions::CLUSTERS`) before they are
 //! measured, `--polish-exact` with `lodgen_pm::polish` (the hierarchies'
-//! closest points, default options). `--write-levels DIR` writes the welded
+//! closest points, default options); `--worst R`, `--worst-cli R`: `quality/worst.rs`. `--write-levels DIR` writes the welded
 //! input and lodgen's and meshoptimizer's levels of each mesh as OBJ files
 //! to `DIR` (`quality/levels.rs`), for `lodgen measure`, which says where a
 //! cell's maximum lies.
@@ -56,6 +56,7 @@ mod levels;
 mod peers;
 mod plot;
 mod rounding;
+mod worst;
 
 use peers::{peer_python, python_peers, PEERS};
 
@@ -119,6 +120,8 @@ struct Args {
     fresh: bool,
     /// `--write-levels DIR`: the input and the levels as OBJ files.
     write_levels: Option<PathBuf>,
+    /// `--worst R` (rounds; 0: off) / `--worst-cli R` (`quality/worst.rs`).
+    worst: (u32, bool),
 }
 
 /// How `--polish` pairs the surfaces.
@@ -141,6 +144,7 @@ fn parse(args: &[String]) -> Result<Args> {
         polish: None,
         fresh: false,
         write_levels: None,
+        worst: (0, false),
     };
     let mut it = args.iter();
     let mut chosen = false;
@@ -162,13 +166,17 @@ fn parse(args: &[String]) -> Result<Args> {
             "--polish" => out.polish = Some(Polish::Clusters),
             "--polish-exact" => out.polish = Some(Polish::Exact),
             "--fresh" => out.fresh = true,
+            "--worst" | "--worst-cli" => {
+                let r = it.next().context("--worst needs a round count")?;
+                out.worst = (r.parse().context("--worst R")?, a == "--worst-cli");
+            }
             "--write-levels" => {
                 let dir = it.next().context("--write-levels needs a directory")?;
                 out.write_levels = Some(PathBuf::from(dir));
             }
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach-off, --reach-faces, --polish, --polish-exact, --fresh, \
+                 --reach-off, --reach-faces, --polish, --polish-exact, --worst R, --worst-cli R, --fresh, \
                  --write-levels DIR)"
             ),
         }
@@ -325,7 +333,8 @@ pub fn run(args: &[String]) -> Result<()> {
         let m = input(&assets, name)?;
         let reference = Reference::new(MeshRef::new(&m.positions, &m.triangles))?;
         let rounding = input_rounding(&assets, name, &reference)?;
-        let levels = lodgen_levels(&m, &args)?;
+        let mut levels = lodgen_levels(&m, &args)?;
+        worst::fix_levels(&reference, &m, &mut levels, name, &mopts, args.worst)?;
         if let Some(dir) = &args.write_levels {
             write_levels(dir, name, &m, &levels)?;
         }

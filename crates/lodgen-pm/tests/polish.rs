@@ -206,3 +206,51 @@ fn clusters_polish_is_closer_and_deterministic() {
     let (before, after) = (err(&level), err(&polished));
     assert_closer_and_unflipped(&level, &polished, &before, &after, 0.85);
 }
+
+/// `fix_worst`: the error it returns is a measurement of the level as it
+/// leaves it, the Hausdorff distance never rises, the RMS stays within its
+/// bound, only positions change, and on a coarse torus the worst spot falls.
+#[test]
+fn fix_worst_lowers_the_maximum_and_reports_a_measurement() {
+    use lodgen_pm::polish::{fix_worst, WorstOptions};
+    let (original, level) = level_of(&torus(1.0, 0.3, 48, 24), 0.1);
+    let reference = Reference::new(MeshRef::new(&original.positions, &original.triangles)).unwrap();
+    let mopts = MeasureOptions::DEFAULT;
+    let mut fixed = level.clone();
+    let opts = WorstOptions {
+        rounds: 3,
+        ..WorstOptions::DEFAULT
+    };
+    let fix = fix_worst(
+        &reference,
+        MeshRef::new(&original.positions, &original.triangles),
+        &mut fixed,
+        &mopts,
+        &opts,
+    )
+    .unwrap();
+    let again = reference
+        .measure(MeshRef::new(&fixed.positions, &fixed.triangles), &mopts)
+        .unwrap();
+    assert_eq!(fix.error, again);
+    let before = reference
+        .measure(MeshRef::new(&level.positions, &level.triangles), &mopts)
+        .unwrap();
+    assert_eq!(fix.before, before);
+    assert_eq!(fixed.triangles, level.triangles);
+    assert!(fix.kept >= 1, "no round kept");
+    assert!(
+        fix.error.hausdorff() < before.hausdorff(),
+        "H {} -> {}",
+        before.hausdorff_percent(),
+        fix.error.hausdorff_percent()
+    );
+    assert!(fix.error.rms() <= before.rms() * opts.rms_growth);
+    let moved = (0..level.positions.len())
+        .filter(|&v| level.positions[v] != fixed.positions[v])
+        .count();
+    assert!(
+        moved > 0 && moved <= 3 * fix.kept as usize,
+        "{moved} vertices moved"
+    );
+}

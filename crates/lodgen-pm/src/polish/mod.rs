@@ -51,8 +51,10 @@
 //! same bits. Topology is never changed, only positions.
 
 mod clusters;
+mod worst;
 
 pub use clusters::{polish_clusters, Original};
+pub use worst::{fix_worst, WorstFix, WorstOptions};
 
 use rayon::prelude::*;
 

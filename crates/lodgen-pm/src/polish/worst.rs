@@ -1,0 +1,283 @@
+//! The worst spot of a level, fixed where it lies ([`fix_worst`]).
+//!
+//! A level's Hausdorff distance is one point: the level face at the
+//! maximum (B → A) or nearest to it (A → B) is usually a face bridging a
+//! recess or a vertex left short of a tip, and moving that face's three
+//! corners a little lowers it with no effect elsewhere. Each round: the
+//! level is measured (the caller's [`MeasureOptions`]); the corners of that
+//! face move by a pattern search (each coordinate ± a step, from the
+//! maximum's distance halved ten times, rounded to `f32`) that lowers the
+//! largest distance over the points around them: a grid of 28 points on
+//! each original triangle near the faces that move (within twice the
+//! maximum of their corners' box), against the level, and the same grid on
+//! each moving face, against the original; a move that turns a moving face
+//! by more than 60° is refused. Then the level is measured again and the
+//! move kept only when its Hausdorff distance fell and its RMS stays within
+//! [`WorstOptions::rms_growth`] of the unfixed level's; otherwise it is
+//! undone and the fix stops. So the error returned is a measurement of the
+//! level as it is left, never an estimate, and never above the unfixed one.
+//!
+//! Cost: every round measures the whole level once more (on the bunny a
+//! level's measurement is about a sixth of the command's CPU), so it is
+//! not run by default (docs/quality.md, session 27).
+//!
+//! Where it applies: a level's positions only (topology untouched), as
+//! [`super::polish`]: the vertex-split log and the stream keep the
+//! simplifier's positions. Deterministic: the search is sequential and
+//! every measurement is thread-count independent.
+
+use crate::mesh::Mesh;
+use crate::metric::triangle::{closest_point_on_triangle, cross, dot, sub};
+use crate::metric::{ErrorReport, MeasureOptions, MeshError, MeshRef, Reference, TriangleBvh};
+
+/// How far [`fix_worst`] goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorstOptions {
+    /// Rounds (each at the maximum the last measurement found).
+    pub rounds: u32,
+    /// The RMS may end at most this factor above the unfixed level's.
+    pub rms_growth: f64,
+}
+
+impl WorstOptions {
+    /// Six rounds, RMS within 1 %.
+    pub const DEFAULT: WorstOptions = WorstOptions {
+        rounds: 6,
+        rms_growth: 1.01,
+    };
+}
+
+impl Default for WorstOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What [`fix_worst`] did: the level's error as it is left (measured) and
+/// the rounds kept.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorstFix {
+    /// The level's error as it is left (the last kept round's measurement).
+    pub error: ErrorReport,
+    /// The unfixed level's error.
+    pub before: ErrorReport,
+    /// Rounds whose move was kept.
+    pub kept: u32,
+}
+
+type P = [f64; 3];
+
+fn wide(p: [f32; 3]) -> P {
+    [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
+}
+
+fn dist(p: P, [a, b, c]: [P; 3]) -> f64 {
+    let q = closest_point_on_triangle(p, a, b, c);
+    dot(sub(p, q), sub(p, q)).sqrt()
+}
+
+fn measure(
+    reference: &Reference,
+    level: &Mesh,
+    mopts: &MeasureOptions,
+) -> Result<ErrorReport, MeshError> {
+    reference.measure(MeshRef::new(&level.positions, &level.triangles), mopts)
+}
+
+/// Fixes the worst spot of `level` (a simplification of `original`, which
+/// `reference` was made from), round by round (module docs); `level`'s
+/// positions are left as the last kept round made them.
+pub fn fix_worst(
+    reference: &Reference,
+    original: MeshRef<'_>,
+    level: &mut Mesh,
+    mopts: &MeasureOptions,
+    opts: &WorstOptions,
+) -> Result<WorstFix, MeshError> {
+    let before = measure(reference, level, mopts)?;
+    let rms_cap = before.rms() * opts.rms_growth;
+    let mut e = before;
+    let mut kept = 0;
+    for _ in 0..opts.rounds {
+        let (at, h) = if e.a_to_b.max >= e.b_to_a.max {
+            (e.a_to_b.at, e.a_to_b.max)
+        } else {
+            (e.b_to_a.at, e.b_to_a.max)
+        };
+        let Some(at) = at else { break };
+        let old = level.positions.clone();
+        if !improve(reference, original, level, at, h) {
+            break;
+        }
+        let e1 = measure(reference, level, mopts)?;
+        if e1.hausdorff() < e.hausdorff() && e1.rms() <= rms_cap {
+            e = e1;
+            kept += 1;
+        } else {
+            level.positions = old;
+            break;
+        }
+    }
+    Ok(WorstFix {
+        error: e,
+        before,
+        kept,
+    })
+}
+
+/// The local problem: which vertices move, the faces they carry, the
+/// points that judge them.
+struct Local {
+    verts: Vec<u32>,
+    faces: Vec<[u32; 3]>,
+    /// Original points near the moving faces, with their distance to the
+    /// rest of the level.
+    a_points: Vec<(P, f64)>,
+    /// Old unit normals of `faces` (flip test).
+    normals: Vec<P>,
+}
+
+/// Divisions of a triangle's edge in the grid of judging points (28 per
+/// triangle, its corners and edges included).
+const GRID: usize = 6;
+
+fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
+    let bvh = TriangleBvh::new(MeshRef::new(&level.positions, &level.triangles)).ok()?;
+    let (_, f, _) = bvh.closest_point(at)?;
+    let mut verts: Vec<u32> = level.triangles[f as usize].to_vec();
+    verts.sort_unstable();
+    verts.dedup();
+    let (faces, rest): (Vec<[u32; 3]>, Vec<[u32; 3]>) = level
+        .triangles
+        .iter()
+        .partition(|t| t.iter().any(|v| verts.binary_search(v).is_ok()));
+    let pos: Vec<P> = level.positions.iter().map(|&p| wide(p)).collect();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for t in &faces {
+        for &v in t {
+            for k in 0..3 {
+                lo[k] = lo[k].min(pos[v as usize][k] - 2.0 * h);
+                hi[k] = hi[k].max(pos[v as usize][k] + 2.0 * h);
+            }
+        }
+    }
+    let inside = |p: P| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+    let rest_bvh = TriangleBvh::new(MeshRef::new(&level.positions, &rest)).ok();
+    let op: Vec<P> = original.positions.iter().map(|&p| wide(p)).collect();
+    let mut pts = Vec::new();
+    for t in original.triangles {
+        let c = [op[t[0] as usize], op[t[1] as usize], op[t[2] as usize]];
+        for i in 0..=GRID {
+            for j in 0..=GRID - i {
+                let k = GRID - i - j;
+                let w = [i as f64, j as f64, k as f64].map(|x| x / GRID as f64);
+                let p = [0, 1, 2].map(|a| w[0] * c[0][a] + w[1] * c[1][a] + w[2] * c[2][a]);
+                if inside(p) {
+                    pts.push(p);
+                }
+            }
+        }
+    }
+    let a_points = pts
+        .into_iter()
+        .map(|p| {
+            let d = rest_bvh
+                .as_ref()
+                .and_then(|b| b.closest_point(p))
+                .map_or(f64::INFINITY, |(d2, _, _)| d2.sqrt());
+            (p, d)
+        })
+        .collect();
+    let normals = faces.iter().map(|t| unit_normal(&pos, *t)).collect();
+    Some(Local {
+        verts,
+        faces,
+        a_points,
+        normals,
+    })
+}
+
+fn unit_normal(pos: &[P], t: [u32; 3]) -> P {
+    let [a, b, c] = t.map(|v| pos[v as usize]);
+    let n = cross(sub(b, a), sub(c, a));
+    let l = dot(n, n).sqrt();
+    if l > 0.0 {
+        n.map(|x| x / l)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// The largest distance over the local points with the level at `pos`;
+/// infinite when a moving face turns by more than 60° or loses its area.
+fn score(reference: &Reference, l: &Local, pos: &[P]) -> f64 {
+    for (t, n0) in l.faces.iter().zip(&l.normals) {
+        if dot(unit_normal(pos, *t), *n0) < 0.5 {
+            return f64::INFINITY;
+        }
+    }
+    let tri = |t: &[u32; 3]| t.map(|v| pos[v as usize]);
+    let mut worst: f64 = 0.0;
+    for &(p, rest) in &l.a_points {
+        let d = l.faces.iter().fold(rest, |d, t| d.min(dist(p, tri(t))));
+        worst = worst.max(d);
+    }
+    for t in &l.faces {
+        let c = tri(t);
+        for i in 0..=GRID {
+            for j in 0..=GRID - i {
+                let k = GRID - i - j;
+                let w = [i as f64, j as f64, k as f64].map(|x| x / GRID as f64);
+                let p = [0, 1, 2].map(|a| w[0] * c[0][a] + w[1] * c[1][a] + w[2] * c[2][a]);
+                if let Some((d2, _, _)) = reference.bvh().closest_point(p) {
+                    worst = worst.max(d2.sqrt());
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// Pattern search over the local vertices' coordinates (f32 steps); true
+/// when the level moved.
+fn improve(reference: &Reference, original: MeshRef<'_>, level: &mut Mesh, at: P, h: f64) -> bool {
+    let Some(l) = local(original, level, at, h) else {
+        return false;
+    };
+    let mut pos: Vec<P> = level.positions.iter().map(|&p| wide(p)).collect();
+    let mut best = score(reference, &l, &pos);
+    let start = best;
+    let mut step = h;
+    for _ in 0..10 {
+        let mut moved = true;
+        while moved {
+            moved = false;
+            for &v in &l.verts {
+                for axis in 0..3 {
+                    for sign in [1.0, -1.0] {
+                        let old = pos[v as usize];
+                        let mut p = old;
+                        p[axis] = f64::from((p[axis] + sign * step) as f32);
+                        pos[v as usize] = p;
+                        let s = score(reference, &l, &pos);
+                        if s < best * (1.0 - 1e-9) {
+                            best = s;
+                            moved = true;
+                        } else {
+                            pos[v as usize] = old;
+                        }
+                    }
+                }
+            }
+        }
+        step *= 0.5;
+    }
+    if best >= start {
+        return false;
+    }
+    for &v in &l.verts {
+        let p = pos[v as usize];
+        level.positions[v as usize] = [p[0] as f32, p[1] as f32, p[2] as f32];
+    }
+    true
+}
