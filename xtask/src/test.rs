@@ -19,8 +19,12 @@
 //! 4. The Python package's tests: `pip install ./crates/lodgen` (so the module
 //!    tested is the current source) into the venv `bash .ci/run` makes
 //!    (`target/ci-venv`, or the Python of `LODGEN_PYTHON`, which must have
-//!    pytest, numpy, trimesh and dask[distributed]), a release `lodgen` for
-//!    the comparisons, then pytest on `crates/lodgen/python/tests`.
+//!    pytest, numpy, trimesh and dask[distributed]), then pytest on
+//!    `crates/lodgen/python/tests`. The command the tests compare the module
+//!    with is the `lodgen` step 1 built (`target/debug/lodgen`): no release
+//!    build of the binary (3 minutes of CI), and the comparisons then also
+//!    check that the optimised module and the unoptimised command write the
+//!    same bytes.
 //!
 //! Outputs are required (no glTF file, or no report/.glb pair, is a failure)
 //! when `LODGEN_REQUIRE_GLTF=1`, or, when that variable is unset, as soon as
@@ -192,7 +196,7 @@ fn outputs_required(root: &Path) -> Result<(bool, String)> {
 }
 
 /// Step 4: install the Python package from the checkout into the test venv
-/// and run pytest against a release `lodgen`.
+/// and run pytest against the `lodgen` that step 1 built.
 fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
     let python = std::env::var_os("LODGEN_PYTHON")
         .map(PathBuf::from)
@@ -227,19 +231,11 @@ fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
     if steps.run("pip install ./crates/lodgen", &mut pip) != Outcome::Passed {
         return;
     }
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| OsString::from("cargo"));
-    let mut build = Command::new(cargo);
-    build
-        .args(["build", "--release", "-p", "lodgen"])
-        .current_dir(root);
-    if steps.run("cargo build --release -p lodgen", &mut build) != Outcome::Passed {
-        return;
-    }
     let mut pytest = Command::new(&python);
     pytest
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(root.join("crates/lodgen/python/tests"))
-        .env("LODGEN_BIN", root.join("target/release/lodgen"))
+        .env("LODGEN_BIN", root.join("target/debug/lodgen"))
         .stdin(Stdio::null())
         .current_dir(root.join("target"));
     steps.run("pytest crates/lodgen/python/tests", &mut pytest);
