@@ -21,8 +21,9 @@
 //!    (`target/ci-venv`, or the Python of `LODGEN_PYTHON`, which must have
 //!    pytest, numpy, trimesh and dask[distributed]), then pytest on
 //!    `crates/lodgen/python/tests`. The command the tests compare the module
-//!    with is the `lodgen` step 1 built (`target/debug/lodgen`): no release
-//!    build of the binary (3 minutes of CI), and the comparisons then also
+//!    with is the `lodgen` step 1 built (`target/debug/lodgen`, or the
+//!    directory of the profile its arguments chose: [`step1_binary`]): no
+//!    release build of the binary (3 minutes of CI), and the comparisons then also
 //!    check that the optimised module and the unoptimised command write the
 //!    same bytes.
 //!
@@ -195,9 +196,40 @@ fn outputs_required(root: &Path) -> Result<(bool, String)> {
     ))
 }
 
+/// The `lodgen` binary `cargo test` built for its CLI tests with the extra
+/// arguments `args`: in the directory of the profile they chose (`--release`,
+/// `--profile NAME`), `target/debug` by default. (A plain `cargo build`
+/// would link another one: test builds unify the dev-dependencies' features.)
+fn step1_binary(root: &Path, args: &[String]) -> PathBuf {
+    let mut dir = "debug".to_string();
+    let mut it = args.iter().take_while(|a| *a != "--");
+    while let Some(a) = it.next() {
+        if a == "--release" || a == "-r" {
+            dir = "release".into();
+        } else if let Some(p) = a.strip_prefix("--profile=") {
+            dir = profile_dir(p);
+        } else if a == "--profile" {
+            if let Some(p) = it.next() {
+                dir = profile_dir(p);
+            }
+        }
+    }
+    root.join("target").join(dir).join("lodgen")
+}
+
+/// Cargo's output directory for profile `p` (`dev` and `test` share `debug`,
+/// `bench` shares `release`).
+fn profile_dir(p: &str) -> String {
+    match p {
+        "dev" | "test" => "debug".into(),
+        "bench" => "release".into(),
+        other => other.into(),
+    }
+}
+
 /// Step 4: install the Python package from the checkout into the test venv
-/// and run pytest against the `lodgen` that step 1 built.
-fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
+/// and run pytest against `bin`, the `lodgen` that step 1 built.
+fn python_tests(root: &Path, bin: &Path, ci: bool, steps: &mut Steps) {
     let python = std::env::var_os("LODGEN_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("target/ci-venv/bin/python"));
@@ -235,7 +267,7 @@ fn python_tests(root: &Path, ci: bool, steps: &mut Steps) {
     pytest
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(root.join("crates/lodgen/python/tests"))
-        .env("LODGEN_BIN", root.join("target/debug/lodgen"))
+        .env("LODGEN_BIN", bin)
         .stdin(Stdio::null())
         .current_dir(root.join("target"));
     steps.run("pytest crates/lodgen/python/tests", &mut pytest);
@@ -316,7 +348,7 @@ pub fn run(cargo_test_args: &[String]) -> Result<()> {
     js_checks(&root, &out, ci, &mut steps)?;
 
     // 4. The Python package.
-    python_tests(&root, ci, &mut steps);
+    python_tests(&root, &step1_binary(&root, cargo_test_args), ci, &mut steps);
 
     print_summary(&steps, t_all.elapsed().as_secs_f64())
 }
@@ -432,4 +464,41 @@ fn print_summary(steps: &Steps, secs: f64) -> Result<()> {
         bail!("{failed} check(s) failed");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pytest step compares the module with the binary step 1 built:
+    /// the profile directory follows `cargo test`'s own arguments, and
+    /// nothing after `--` (the test binaries' arguments) counts.
+    #[test]
+    fn step1_binary_follows_the_profile_arguments() {
+        let root = Path::new("/r");
+        let bin = |args: &[&str]| {
+            let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+            step1_binary(root, &args)
+        };
+        assert_eq!(bin(&[]), Path::new("/r/target/debug/lodgen"));
+        assert_eq!(
+            bin(&["-p", "lodgen", "golden"]),
+            Path::new("/r/target/debug/lodgen")
+        );
+        assert_eq!(bin(&["--release"]), Path::new("/r/target/release/lodgen"));
+        assert_eq!(bin(&["-r"]), Path::new("/r/target/release/lodgen"));
+        assert_eq!(
+            bin(&["--profile", "test"]),
+            Path::new("/r/target/debug/lodgen")
+        );
+        assert_eq!(
+            bin(&["--profile=bench"]),
+            Path::new("/r/target/release/lodgen")
+        );
+        assert_eq!(bin(&["--profile", "ci"]), Path::new("/r/target/ci/lodgen"));
+        assert_eq!(
+            bin(&["--", "--release"]),
+            Path::new("/r/target/debug/lodgen")
+        );
+    }
 }
