@@ -1009,3 +1009,51 @@ fn polish_lowers_the_written_levels_errors() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// `--fix-worst` reaches the build (different bytes, no level's Hausdorff
+/// distance raised, one lowered, the counts kept), `--fix-worst=0` is the
+/// default run byte for byte, and the flag is refused with `--measure off`
+/// (nothing to find the worst spot by) or a round count that is not one,
+/// with a message naming it. Fails when the flag is ignored or accepted
+/// where it cannot act.
+#[test]
+fn fix_worst_lowers_the_worst_spot_and_needs_the_measurement() {
+    let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/knot.obj");
+    let d = tmp("fix-worst");
+    let hausdorff = |levels: &[serde_json::Value]| -> Vec<(u64, f64)> {
+        levels
+            .iter()
+            .map(|l| {
+                let t = l["triangles"].as_u64().unwrap();
+                (t, l["hausdorff_percent"].as_f64().unwrap())
+            })
+            .collect()
+    };
+    let (plain, plain_bytes) = build_with_report(&input, "10%,2%", &d, "plain", &[]);
+    let (fixed, fixed_bytes) = build_with_report(&input, "10%,2%", &d, "fixed", &["--fix-worst"]);
+    let (_, zero_bytes) = build_with_report(&input, "10%,2%", &d, "zero", &["--fix-worst=0"]);
+    assert_ne!(plain_bytes, fixed_bytes, "--fix-worst changed nothing");
+    assert_eq!(
+        plain_bytes, zero_bytes,
+        "--fix-worst=0 is not the default run"
+    );
+    let (plain, fixed) = (hausdorff(&plain), hausdorff(&fixed));
+    for ((t0, h0), (t1, h1)) in plain.iter().zip(&fixed) {
+        assert_eq!(t0, t1, "--fix-worst changed a triangle count");
+        assert!(h1 <= h0, "Hausdorff {h1} % fixed vs {h0} %");
+    }
+    assert!(plain.iter().zip(&fixed).any(|(p, f)| f.1 < p.1));
+    let i = input.to_str().unwrap();
+    let out = d.join("refused.glb");
+    let o = out.to_str().unwrap();
+    for bad in [
+        vec![i, "--fix-worst", "--measure", "off", "-o", o],
+        vec![i, "--fix-worst=two", "-o", o],
+    ] {
+        let r = lodgen(&bad);
+        assert!(!r.status.success(), "{bad:?} accepted");
+        assert!(stderr(&r).contains("--fix-worst"), "{}", stderr(&r));
+        assert!(!out.exists(), "{bad:?} wrote {}", out.display());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

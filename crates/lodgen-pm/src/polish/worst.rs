@@ -27,6 +27,7 @@
 //! every measurement is thread-count independent.
 
 use crate::mesh::Mesh;
+use crate::metric::bvh::Hint;
 use crate::metric::triangle::{closest_point_on_triangle, cross, dot, sub};
 use crate::metric::{ErrorReport, MeasureOptions, MeshError, MeshRef, Reference, TriangleBvh};
 
@@ -131,7 +132,7 @@ struct Local {
     verts: Vec<u32>,
     faces: Vec<[u32; 3]>,
     /// Original points near the moving faces, with their distance to the
-    /// rest of the level.
+    /// rest of the level, farthest first.
     a_points: Vec<(P, f64)>,
     /// Old unit normals of `faces` (flip test).
     normals: Vec<P>,
@@ -140,6 +141,21 @@ struct Local {
 /// Divisions of a triangle's edge in the grid of judging points (28 per
 /// triangle, its corners and edges included).
 const GRID: usize = 6;
+
+/// Points of a triangle's grid.
+const GRID_POINTS: usize = (GRID + 1) * (GRID + 2) / 2;
+
+/// What [`score`] found nearest last time, where it looks first: the
+/// moving face nearest each original point, the original's triangle
+/// nearest each grid point of each moving face.
+struct Near {
+    faces: Vec<u32>,
+    hints: Vec<Option<Hint>>,
+    /// The original point that gave the last score, measured first (it
+    /// usually gives the next one too, and a high `worst` early settles
+    /// most points by their distance to the rest alone).
+    top: usize,
+}
 
 fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
     let bvh = TriangleBvh::new(MeshRef::new(&level.positions, &level.triangles)).ok()?;
@@ -178,16 +194,20 @@ fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
             }
         }
     }
-    let a_points = pts
+    // (a triangle's grid points one after the other: each query starts
+    // from the previous one's answer)
+    let mut hint = None;
+    let mut a_points: Vec<(P, f64)> = pts
         .into_iter()
         .map(|p| {
-            let d = rest_bvh
-                .as_ref()
-                .and_then(|b| b.closest_point(p))
-                .map_or(f64::INFINITY, |(d2, _, _)| d2.sqrt());
-            (p, d)
+            let found = rest_bvh.as_ref().and_then(|b| b.closest_slot(p, hint));
+            hint = found.map(|(_, h, _)| h);
+            (p, found.map_or(f64::INFINITY, |(d2, _, _)| d2.sqrt()))
         })
         .collect();
+    // (farthest from the rest first: `score` stops at the first point no
+    // nearer the moving faces could raise its maximum)
+    a_points.sort_by(|x, y| y.1.total_cmp(&x.1));
     let normals = faces.iter().map(|t| unit_normal(&pos, *t)).collect();
     Some(Local {
         verts,
@@ -210,18 +230,58 @@ fn unit_normal(pos: &[P], t: [u32; 3]) -> P {
 
 /// The largest distance over the local points with the level at `pos`;
 /// infinite when a moving face turns by more than 60° or loses its area.
-fn score(reference: &Reference, l: &Local, pos: &[P]) -> f64 {
+/// Once it reaches `cap` it is returned as it stands (at least `cap`: the
+/// caller only asks whether the exact value is below `cap`). `near[i]` is
+/// the moving face last found nearest to original point `i`, tried first;
+/// `hints` the original's triangles last found nearest to the moving faces'
+/// grid points.
+fn score(reference: &Reference, l: &Local, pos: &[P], cap: f64, near: &mut Near) -> f64 {
     for (t, n0) in l.faces.iter().zip(&l.normals) {
         if dot(unit_normal(pos, *t), *n0) < 0.5 {
             return f64::INFINITY;
         }
     }
     let tri = |t: &[u32; 3]| t.map(|v| pos[v as usize]);
+    let nearest = |p: P, rest: f64| l.faces.iter().fold(rest, |d, t| d.min(dist(p, tri(t))));
     let mut worst: f64 = 0.0;
-    for &(p, rest) in &l.a_points {
-        let d = l.faces.iter().fold(rest, |d, t| d.min(dist(p, tri(t))));
-        worst = worst.max(d);
+    let mut top = near.top;
+    if let Some(&(p, rest)) = l.a_points.get(top) {
+        worst = nearest(p, rest);
+        if worst >= cap {
+            return worst;
+        }
     }
+    for (i, (&(p, rest), near)) in l.a_points.iter().zip(near.faces.iter_mut()).enumerate() {
+        // (farthest from the rest first: a point no farther from it than
+        // `worst` cannot raise it, nor can any after it)
+        if rest <= worst {
+            break;
+        }
+        // (nor can a point that one face brings within `worst`)
+        let first = l
+            .faces
+            .get(*near as usize)
+            .map_or(rest, |t| dist(p, tri(t)));
+        if first <= worst {
+            continue;
+        }
+        let mut d = rest.min(first);
+        for (f, t) in l.faces.iter().enumerate() {
+            let e = dist(p, tri(t));
+            if e < d {
+                d = e;
+                *near = f as u32;
+            }
+        }
+        if d > worst {
+            (worst, top) = (d, i);
+            if worst >= cap {
+                return worst;
+            }
+        }
+    }
+    near.top = top;
+    let mut hints = near.hints.iter_mut();
     for t in &l.faces {
         let c = tri(t);
         for i in 0..=GRID {
@@ -229,8 +289,20 @@ fn score(reference: &Reference, l: &Local, pos: &[P]) -> f64 {
                 let k = GRID - i - j;
                 let w = [i as f64, j as f64, k as f64].map(|x| x / GRID as f64);
                 let p = [0, 1, 2].map(|a| w[0] * c[0][a] + w[1] * c[1][a] + w[2] * c[2][a]);
-                if let Some((d2, _, _)) = reference.bvh().closest_point(p) {
+                let Some(hint) = hints.next() else {
+                    continue;
+                };
+                // (only a point farther than `worst` raises it: nearer ones
+                // are settled by a bounded search, a hair under `worst` so
+                // that rounding the square settles none that would)
+                let floor = worst * worst * (1.0 - 1e-12);
+                let (d2, h) = reference.bvh().farther_than(p, floor, *hint);
+                *hint = h.or(*hint);
+                if let Some(d2) = d2 {
                     worst = worst.max(d2.sqrt());
+                    if worst >= cap {
+                        return worst;
+                    }
                 }
             }
         }
@@ -245,7 +317,12 @@ fn improve(reference: &Reference, original: MeshRef<'_>, level: &mut Mesh, at: P
         return false;
     };
     let mut pos: Vec<P> = level.positions.iter().map(|&p| wide(p)).collect();
-    let mut best = score(reference, &l, &pos);
+    let mut near = Near {
+        faces: vec![0; l.a_points.len()],
+        hints: vec![None; l.faces.len() * GRID_POINTS],
+        top: 0,
+    };
+    let mut best = score(reference, &l, &pos, f64::INFINITY, &mut near);
     let start = best;
     let mut step = h;
     for _ in 0..10 {
@@ -259,8 +336,9 @@ fn improve(reference: &Reference, original: MeshRef<'_>, level: &mut Mesh, at: P
                         let mut p = old;
                         p[axis] = f64::from((p[axis] + sign * step) as f32);
                         pos[v as usize] = p;
-                        let s = score(reference, &l, &pos);
-                        if s < best * (1.0 - 1e-9) {
+                        let cap = best * (1.0 - 1e-9);
+                        let s = score(reference, &l, &pos, cap, &mut near);
+                        if s < cap {
                             best = s;
                             moved = true;
                         } else {

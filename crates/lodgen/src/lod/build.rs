@@ -15,8 +15,7 @@ use lodgen_pm::{
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh, Warning};
 
 use super::error::BuildError;
-use super::extract::extract;
-use super::fit::FitSource;
+use super::extract::{deferred_primitives, extract_levels, Extracted};
 use super::flat::{flatten, Flat};
 use super::measure::Measurer;
 use super::options::{BuildOptions, LevelHook, LevelRequest, Progress};
@@ -396,11 +395,13 @@ fn build_mesh(
 /// numbering ([`measurer_in_input_order`]): a large mesh (the small ones'
 /// is built beside the simplification) whose levels are measured, by count
 /// or ratio (nothing is measured before the levels are out), unpolished
-/// (the polish builds its own), with a level to measure.
+/// (the polish builds its own) and unfixed (the fix measures each level as
+/// it is extracted), with a level to measure.
 fn measured_in_input_order(opts: &BuildOptions, side_by_side: bool, levels: &[Extracted]) -> bool {
     !side_by_side
         && opts.measured
         && opts.polish.is_none()
+        && opts.fix_worst.is_none()
         && matches!(opts.levels, LevelRequest::Specs(_))
         && levels.iter().any(|e| e.mesh.is_some())
 }
@@ -427,9 +428,11 @@ fn free_sequence(
 }
 
 /// Every level extracted ([`extract_levels`]): polished first with
-/// [`BuildOptions::polish`]; below [`SIDE_BY_SIDE_MAX_TRIANGLES`]
+/// [`BuildOptions::polish`], its worst spot fixed with
+/// [`BuildOptions::fix_worst`]; below [`SIDE_BY_SIDE_MAX_TRIANGLES`]
 /// (`side_by_side`) while the original's hierarchy is built on the other
-/// core; `freed`: the input was freed ([`frees_input_early`]).
+/// core (before, when the fix needs it); `freed`: the input was freed
+/// ([`frees_input_early`]).
 fn extract_all(
     mesh: &SourceMesh,
     flat: &Flat,
@@ -445,28 +448,20 @@ fn extract_all(
         .polish
         .map(|_| Original::new(MeshRef::new(&full.positions, &full.triangles)));
     let polish = original.as_ref().zip(opts.polish.as_ref());
-    let extracted = if side_by_side {
+    let fix = opts
+        .fix_worst
+        .as_ref()
+        .map(|w| (measurer, &opts.measure, w));
+    let what = (opts.measured, freed);
+    let extract = || extract_levels(mesh, flat, simplified, splits, what, polish, fix);
+    if side_by_side && fix.is_none() {
         // (the original's hierarchy built on the other core meanwhile)
-        let (extracted, prepared) = rayon::join(
-            || {
-                let what = (opts.measured, freed);
-                extract_levels(mesh, flat, simplified, splits, what, polish)
-            },
-            || measurer.prepare(),
-        );
+        let (extracted, prepared) = rayon::join(extract, || measurer.prepare());
         prepared?;
-        extracted?
+        extracted
     } else {
-        extract_levels(
-            mesh,
-            flat,
-            simplified,
-            splits,
-            (opts.measured, freed),
-            polish,
-        )?
-    };
-    Ok(extracted)
+        extract()
+    }
 }
 
 /// The simplification of a mesh whose input is freed once it is prepared
@@ -591,112 +586,6 @@ fn simplify<'m>(
     r
 }
 
-/// A level cut from the sequence: its primitives, and its mesh while it
-/// waits to be measured.
-struct Extracted {
-    primitives: Vec<Primitive>,
-    /// `None` when the level is not measured: no measurement, or the
-    /// level is the original (its error is 0); kept for a level below the
-    /// input when `deferred`.
-    mesh: Option<Mesh>,
-    /// `Some(material)`: the primitives are made from the mesh once it is
-    /// measured ([`deferred_primitives`]; `primitives` is empty until then).
-    deferred: Option<Option<usize>>,
-}
-
-/// Every level at `splits`: attributes fitted below the input (module
-/// docs), extracted into primitives; its mesh kept when `measured` and the
-/// level is below the input. With `deferred` (a mesh of one positions-only
-/// primitive whose input was freed, [`frees_input_early`]) only the meshes
-/// are kept, the primitives made after their measurement.
-fn extract_levels(
-    mesh: &SourceMesh,
-    flat: &Flat,
-    simplified: &Simplified,
-    splits: &[usize],
-    (measured, deferred): (bool, bool),
-    polish: Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
-) -> Result<Vec<Extracted>, BuildError> {
-    let pm = &simplified.pm;
-    let mut cursor = pm.cursor();
-    let fit_source = FitSource::new(mesh, flat, simplified);
-    let mut out: Vec<Option<Extracted>> = splits.iter().map(|_| None).collect();
-    let mut polished = Mesh::default();
-    // (coarse to fine: the cursor applies each split once, where seeking
-    // the levels finest first refined to the finest, then undid most of it)
-    let mut order: Vec<usize> = (0..splits.len()).collect();
-    order.sort_by_key(|&i| splits[i]);
-    for i in order {
-        let k = splits[i];
-        if deferred && polish.is_none() {
-            // (only the level's mesh, replayed on every core: no cursor,
-            // which would replay it on one and then be cloned)
-            let material = mesh.primitives.first().and_then(|p| p.material);
-            out[i] = Some(Extracted {
-                primitives: Vec::new(),
-                mesh: (k < pm.len()).then(|| pm.mesh_at_splits(k)),
-                deferred: Some(material),
-            });
-            continue;
-        }
-        cursor.seek(k);
-        let mut m = cursor.mesh();
-        if let (Some((original, popts)), true) = (polish, k < pm.len()) {
-            // (the written level polished: [`BuildOptions::polish`])
-            polished.clone_from(m);
-            lodgen_pm::polish_clusters(original, &mut polished, &pm.representatives(k), popts);
-            m = &polished;
-        }
-        if deferred {
-            let material = mesh.primitives.first().and_then(|p| p.material);
-            out[i] = Some(Extracted {
-                primitives: Vec::new(),
-                mesh: (k < pm.len()).then(|| m.clone()),
-                deferred: Some(material),
-            });
-            continue;
-        }
-        // a level below the input gets fitted values (module docs)
-        let fitted = match (&fit_source, cursor.wedges()) {
-            (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
-            _ => None,
-        };
-        out[i] = Some(Extracted {
-            primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
-            mesh: (measured && k < pm.len()).then(|| m.clone()),
-            deferred: None,
-        });
-    }
-    Ok(out.into_iter().flatten().collect())
-}
-
-/// The one primitive of a level of a mesh of one positions-only primitive
-/// ([`frees_input_early`]): what [`extract`] makes of it (every level
-/// vertex one output vertex, numbered in order of first use by the
-/// triangles; no primitive without triangles), from the level's mesh alone.
-fn deferred_primitives(material: Option<usize>, level: &Mesh) -> Vec<Primitive> {
-    if level.triangles.is_empty() {
-        return Vec::new();
-    }
-    let mut out_of = vec![u32::MAX; level.positions.len()];
-    let mut positions = Vec::new();
-    let mut indices = Vec::with_capacity(3 * level.triangles.len());
-    for &v in level.triangles.iter().flatten() {
-        let o = &mut out_of[v as usize];
-        if *o == u32::MAX {
-            *o = positions.len() as u32;
-            positions.push(level.positions[v as usize]);
-        }
-        indices.push(*o);
-    }
-    vec![Primitive {
-        material,
-        positions,
-        indices,
-        ..Primitive::default()
-    }]
-}
-
 /// Whether measuring the levels cannot fail: the original and every level
 /// to measure pass the check the measurement makes ([`MeshRef::validate`]).
 /// Asked only of an input still to free (an input freed early has nothing
@@ -733,7 +622,8 @@ fn measure_levels(
             f(mesh, level, primitives);
         }
     };
-    if side_by_side {
+    // (levels whose worst spot was fixed were measured then)
+    if side_by_side && extracted.iter().all(|l| l.report.is_none()) {
         measuring(0, splits.len());
         let levels: Vec<(&Mesh, usize)> = extracted
             .iter()
@@ -757,7 +647,7 @@ fn measure_levels(
     }
     let mut reports = reports.into_iter();
     for (li, (level, &k)) in extracted.into_iter().zip(splits).enumerate() {
-        let report = match reports.next() {
+        let report = match level.report.or_else(|| reports.next()) {
             Some(r) => r,
             None => {
                 measuring(li, splits.len());

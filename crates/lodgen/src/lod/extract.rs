@@ -3,12 +3,16 @@
 //! corner's wedge (skin and morph targets from that source vertex as they
 //! are), then the fitted values.
 
+use lodgen_pm::metric::{ErrorReport, MeasureOptions};
+use lodgen_pm::polish::{Original, WorstOptions};
 use lodgen_pm::{Mesh, Simplified};
 
 use crate::scene::{Primitive, SourceMesh};
 
-use super::fit::Fitted;
+use super::error::BuildError;
+use super::fit::{FitSource, Fitted};
 use super::flat::{locate, Flat};
+use super::measure::Measurer;
 use super::unit::{normalize3, normalize_weights, orthogonal_tangent};
 
 /// Turn a level of the progressive mesh back into the source's primitives,
@@ -177,4 +181,134 @@ fn push_attributes(to: &mut Primitive, from: &Primitive, v: usize) {
             None => t.push_from(&crate::scene::MorphTarget::default(), v),
         }
     }
+}
+
+/// A level cut from the sequence: its primitives, and its mesh while it
+/// waits to be measured.
+pub(super) struct Extracted {
+    pub(super) primitives: Vec<Primitive>,
+    /// `None` when the level is not measured: no measurement, or the
+    /// level is the original (its error is 0); kept for a level below the
+    /// input when `deferred`.
+    pub(super) mesh: Option<Mesh>,
+    /// `Some(material)`: the primitives are made from the mesh once it is
+    /// measured ([`deferred_primitives`]; `primitives` is empty until then).
+    pub(super) deferred: Option<Option<usize>>,
+    /// The level's error when it was measured already (its worst spot
+    /// fixed, [`extract_levels`]'s `fix`).
+    pub(super) report: Option<ErrorReport>,
+}
+
+/// How [`extract_levels`] fixes each level's worst spot
+/// ([`super::options::BuildOptions::fix_worst`]): the measurer of the
+/// levels, its options and the fix's.
+pub(super) type Fix<'m, 'a> = (&'m Measurer<'a>, &'m MeasureOptions, &'m WorstOptions);
+
+/// Every level at `splits`: attributes fitted below the input (module
+/// docs), extracted into primitives; its mesh kept when `measured` and the
+/// level is below the input. With `deferred` (a mesh of one positions-only
+/// primitive whose input was freed, `build.rs`'s `frees_input_early`) only
+/// the meshes are kept, the primitives made after their measurement. With
+/// `polish` the level's positions are polished, then with `fix` its worst
+/// spot is fixed, which measures it (the report is kept: the level is not
+/// measured again).
+pub(super) fn extract_levels(
+    mesh: &SourceMesh,
+    flat: &Flat,
+    simplified: &Simplified,
+    splits: &[usize],
+    (measured, deferred): (bool, bool),
+    polish: Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
+    fix: Option<Fix<'_, '_>>,
+) -> Result<Vec<Extracted>, BuildError> {
+    let pm = &simplified.pm;
+    let mut cursor = pm.cursor();
+    let fit_source = FitSource::new(mesh, flat, simplified);
+    let mut out: Vec<Option<Extracted>> = splits.iter().map(|_| None).collect();
+    let mut moved = Mesh::default();
+    // (coarse to fine: the cursor applies each split once, where seeking
+    // the levels finest first refined to the finest, then undid most of it)
+    let mut order: Vec<usize> = (0..splits.len()).collect();
+    order.sort_by_key(|&i| splits[i]);
+    for i in order {
+        let k = splits[i];
+        if deferred && polish.is_none() && fix.is_none() {
+            // (only the level's mesh, replayed on every core: no cursor,
+            // which would replay it on one and then be cloned)
+            let material = mesh.primitives.first().and_then(|p| p.material);
+            out[i] = Some(Extracted {
+                primitives: Vec::new(),
+                mesh: (k < pm.len()).then(|| pm.mesh_at_splits(k)),
+                deferred: Some(material),
+                report: None,
+            });
+            continue;
+        }
+        cursor.seek(k);
+        // (the written level moved: [`BuildOptions::polish`], then
+        // [`BuildOptions::fix_worst`])
+        let own = k < pm.len() && (polish.is_some() || fix.is_some());
+        if own {
+            moved.clone_from(cursor.mesh());
+        }
+        if let (Some((original, popts)), true) = (polish, own) {
+            lodgen_pm::polish_clusters(original, &mut moved, &pm.representatives(k), popts);
+        }
+        let report = match (fix, own) {
+            (Some((measurer, mopts, wopts)), true) => {
+                measurer.fix_worst(&mut moved, k, mopts, wopts)?
+            }
+            _ => None,
+        };
+        let m = if own { &moved } else { cursor.mesh() };
+        if deferred {
+            let material = mesh.primitives.first().and_then(|p| p.material);
+            out[i] = Some(Extracted {
+                primitives: Vec::new(),
+                mesh: (k < pm.len()).then(|| m.clone()),
+                deferred: Some(material),
+                report,
+            });
+            continue;
+        }
+        // a level below the input gets fitted values (module docs)
+        let fitted = match (&fit_source, cursor.wedges()) {
+            (Some(f), Some(w)) if k < pm.len() => Some(f.fit(m, w)),
+            _ => None,
+        };
+        out[i] = Some(Extracted {
+            primitives: extract(mesh, flat, simplified, m, cursor.wedges(), fitted.as_ref()),
+            mesh: (measured && report.is_none() && k < pm.len()).then(|| m.clone()),
+            deferred: None,
+            report,
+        });
+    }
+    Ok(out.into_iter().flatten().collect())
+}
+
+/// The one primitive of a level of a mesh of one positions-only primitive
+/// (`frees_input_early` in `build.rs`): what [`extract`] makes of it (every level
+/// vertex one output vertex, numbered in order of first use by the
+/// triangles; no primitive without triangles), from the level's mesh alone.
+pub(super) fn deferred_primitives(material: Option<usize>, level: &Mesh) -> Vec<Primitive> {
+    if level.triangles.is_empty() {
+        return Vec::new();
+    }
+    let mut out_of = vec![u32::MAX; level.positions.len()];
+    let mut positions = Vec::new();
+    let mut indices = Vec::with_capacity(3 * level.triangles.len());
+    for &v in level.triangles.iter().flatten() {
+        let o = &mut out_of[v as usize];
+        if *o == u32::MAX {
+            *o = positions.len() as u32;
+            positions.push(level.positions[v as usize]);
+        }
+        indices.push(*o);
+    }
+    vec![Primitive {
+        material,
+        positions,
+        indices,
+        ..Primitive::default()
+    }]
 }

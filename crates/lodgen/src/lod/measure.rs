@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use lodgen_pm::metric::{Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
+use lodgen_pm::polish::{fix_worst, WorstOptions};
 use lodgen_pm::{Mesh, ProgressiveMesh};
 
 use super::error::BuildError;
@@ -201,6 +202,29 @@ impl<'a> Measurer<'a> {
             .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)));
         self.add_time(t.elapsed());
         r
+    }
+
+    /// Fixes the worst spot of `m`, the mesh after `k` splits, in place
+    /// ([`lodgen_pm::polish::fix_worst`]) and returns the error of `m` as
+    /// it is left (measured); `None` when nothing is measured or `m` is the
+    /// original (nothing to fix: its error is 0).
+    pub(super) fn fix_worst(
+        &self,
+        m: &mut Mesh,
+        k: usize,
+        mopts: &MeasureOptions,
+        wopts: &WorstOptions,
+    ) -> Result<Option<ErrorReport>, BuildError> {
+        if !self.measured || k >= self.splits {
+            return Ok(None);
+        }
+        let reference = self.reference()?;
+        let t = Instant::now();
+        let full = MeshRef::new(&self.full.positions, &self.full.triangles);
+        let fixed = fix_worst(reference, full, m, mopts, wopts)
+            .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)));
+        self.add_time(t.elapsed());
+        Ok(Some(fixed?.error))
     }
 
     /// The errors of `levels` (each a mesh and its split count, as for

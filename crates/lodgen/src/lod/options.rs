@@ -66,6 +66,17 @@ pub struct BuildOptions {
     /// measured errors are the polished ones; the progressive mesh and its
     /// stream keep the logged positions.
     pub polish: Option<lodgen_pm::PolishOptions>,
+    /// Fix each written level's worst spot ([`lodgen_pm::polish::fix_worst`];
+    /// `None`: off, the default): each round measures the level, moves the
+    /// three corners of the face at its maximum to lower the largest
+    /// distance around them, measures again and keeps the move only when the
+    /// Hausdorff distance fell and the RMS stayed within
+    /// [`WorstOptions::rms_growth`](lodgen_pm::polish::WorstOptions) of the
+    /// unfixed level's. A level's reported error is the measurement of the
+    /// level as written (after [`Self::polish`], when both are on). Needs
+    /// [`Self::measured`]; each round costs one more measurement of the
+    /// level. The progressive mesh and its stream keep the logged positions.
+    pub fix_worst: Option<lodgen_pm::polish::WorstOptions>,
     /// Given each level's primitives as they will be written, while another
     /// level is measured (`None`: nobody; the default): see [`LevelHook`].
     pub level_ready: Option<LevelHook>,
@@ -155,6 +166,7 @@ impl Default for BuildOptions {
             keep_progressive: true,
             keep_input: true,
             polish: None,
+            fix_worst: None,
             level_ready: None,
         }
     }
