@@ -379,7 +379,10 @@ def simplify(
     ``reach=False`` (or ``None``, as in Rust) to turn it off;
     ``polish=True`` moves each returned level's vertices towards the input
     (lower error, same triangles; the progressive mesh keeps the
-    simplifier's positions); a level the topology would stop above its
+    simplifier's positions); ``fix_worst=True`` (or a round count,
+    ``fix_worst=2``) fixes each level's worst spot where it lies (lower
+    Hausdorff distance, same triangles; each round measures the level
+    again, so it costs time; needs the measurement); a level the topology would stop above its
     count is reached by running again with joins and flattening allowed
     (holes close, sheets join), ``keep_topology=True`` stops above it
     instead, ``allow_topology_change=True`` also lets hard edges, seams and

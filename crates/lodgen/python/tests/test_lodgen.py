@@ -352,6 +352,23 @@ def test_polish_moves_the_written_levels_towards_the_input():
         assert b.errors.hausdorff < a.errors.hausdorff, (a.errors, b.errors)
 
 
+def test_fix_worst_lowers_the_worst_spot_and_needs_the_measurement():
+    v, f = torus()
+    plain = lodgen.simplify(v, f, levels=[0.1, 0.02])
+    fixed = lodgen.simplify(v, f, levels=[0.1, 0.02], fix_worst=True)
+    one = lodgen.simplify(v, f, levels=[0.1, 0.02], fix_worst=1)
+    lower = 0
+    for a, b, c in zip(plain.levels, fixed.levels, one.levels):
+        # same triangles; the Hausdorff distance never raised, RMS within 1 %
+        np.testing.assert_array_equal(a.faces, b.faces)
+        assert b.errors.hausdorff <= c.errors.hausdorff <= a.errors.hausdorff, (a, b, c)
+        assert b.errors.rms <= 1.01 * a.errors.rms, (a.errors, b.errors)
+        lower += b.errors.hausdorff < a.errors.hausdorff
+    assert lower > 0
+    with pytest.raises(lodgen.LodgenError, match="--fix-worst"):
+        lodgen.simplify(v, f, levels=[0.1], fix_worst=True, measure="off")
+
+
 def test_topology_change_reaches_a_count_the_topology_stops():
     # a closed torus keeps its hole: with keep_topology=True it stops above
     # 16 triangles and says why; by default (run again with joins allowed)
