@@ -35,7 +35,7 @@
 //! polishes lodgen's levels as `lodgen --polish` does
 //! (`lodgen_pm::polish_clusters`, `PolishOptions::CLUSTERS`) before they are
 //! measured, `--polish-exact` with `lodgen_pm::polish` (the hierarchies'
-//! closest points, default options); `--worst R`, `--worst-cli R`: `quality/worst.rs`. `--write-levels DIR` writes the welded
+//! closest points, default options); `--worst R`, `--worst-cli R`, `--worst-bounded R`: `quality/worst.rs`. `--write-levels DIR` writes the welded
 //! input and lodgen's and meshoptimizer's levels of each mesh as OBJ files
 //! to `DIR` (`quality/levels.rs`), for `lodgen measure`, which says where a
 //! cell's maximum lies.
@@ -120,8 +120,9 @@ struct Args {
     fresh: bool,
     /// `--write-levels DIR`: the input and the levels as OBJ files.
     write_levels: Option<PathBuf>,
-    /// `--worst R` (rounds; 0: off) / `--worst-cli R` (`quality/worst.rs`).
-    worst: (u32, bool),
+    /// `--worst R` (rounds; 0: off) / `--worst-cli R` / `--worst-bounded R`
+    /// (`quality/worst.rs`).
+    worst: (u32, worst::Judge),
 }
 
 /// How `--polish` pairs the surfaces.
@@ -144,7 +145,7 @@ fn parse(args: &[String]) -> Result<Args> {
         polish: None,
         fresh: false,
         write_levels: None,
-        worst: (0, false),
+        worst: (0, worst::Judge::Table),
     };
     let mut it = args.iter();
     let mut chosen = false;
@@ -166,9 +167,14 @@ fn parse(args: &[String]) -> Result<Args> {
             "--polish" => out.polish = Some(Polish::Clusters),
             "--polish-exact" => out.polish = Some(Polish::Exact),
             "--fresh" => out.fresh = true,
-            "--worst" | "--worst-cli" => {
+            "--worst" | "--worst-cli" | "--worst-bounded" => {
                 let r = it.next().context("--worst needs a round count")?;
-                out.worst = (r.parse().context("--worst R")?, a == "--worst-cli");
+                let judge = match a.as_str() {
+                    "--worst-cli" => worst::Judge::Command,
+                    "--worst-bounded" => worst::Judge::Bounded,
+                    _ => worst::Judge::Table,
+                };
+                out.worst = (r.parse().context("--worst R")?, judge);
             }
             "--write-levels" => {
                 let dir = it.next().context("--write-levels needs a directory")?;
@@ -176,7 +182,7 @@ fn parse(args: &[String]) -> Result<Args> {
             }
             other => bail!(
                 "unknown option {other:?} (expected --meshes a,b, --quick, --no-peers, --greedy, \
-                 --reach-off, --reach-faces, --polish, --polish-exact, --worst R, --worst-cli R, --fresh, \
+                 --reach-off, --reach-faces, --polish, --polish-exact, --worst R, --worst-cli R, --worst-bounded R, --fresh, \
                  --write-levels DIR)"
             ),
         }

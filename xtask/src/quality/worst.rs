@@ -1,13 +1,22 @@
-//! `--worst R` / `--worst-cli R`: each of lodgen's levels through
-//! `lodgen_pm::polish::fix_worst` (up to R rounds) before the table measures
-//! it, judged by the table's measurement (`--worst`) or by the command's
-//! default one (`--worst-cli`, `MeasureOptions::DEFAULT`). Neither is what
-//! the command runs.
+//! `--worst R` / `--worst-cli R` / `--worst-bounded R`: each of lodgen's
+//! levels through `lodgen_pm::polish::fix_worst` (up to R rounds) before the
+//! table measures it, judged by the table's measurement (`--worst`), by the
+//! command's default one (`--worst-cli`, `MeasureOptions::DEFAULT`: what
+//! `lodgen --fix-worst` runs) or by the bounded maximum (`--worst-bounded`,
+//! `MeasureOptions::BOUNDED`: `lodgen --measure bounded --fix-worst`).
 
 use anyhow::Result;
 use lodgen_pm::metric::{MeasureOptions, MeshRef, Reference};
 use lodgen_pm::polish::{fix_worst, WorstOptions};
 use lodgen_pm::Mesh;
+
+/// Which measurement finds each round's maximum and judges its move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Judge {
+    Table,
+    Command,
+    Bounded,
+}
 
 /// Fixes the worst spot of each of `levels` (of `m`), printing what each
 /// round did to stderr.
@@ -17,7 +26,7 @@ pub fn fix_levels(
     levels: &mut [Mesh],
     name: &str,
     mopts: &MeasureOptions,
-    (rounds, cli): (u32, bool),
+    (rounds, judge): (u32, Judge),
 ) -> Result<()> {
     if rounds == 0 {
         return Ok(());
@@ -26,7 +35,11 @@ pub fn fix_levels(
         rounds,
         ..WorstOptions::DEFAULT
     };
-    let judge = if cli { MeasureOptions::DEFAULT } else { *mopts };
+    let judge = match judge {
+        Judge::Table => *mopts,
+        Judge::Command => MeasureOptions::DEFAULT,
+        Judge::Bounded => MeasureOptions::BOUNDED,
+    };
     for level in levels {
         let original = MeshRef::new(&m.positions, &m.triangles);
         let fix = fix_worst(reference, original, level, &judge, &wopts)?;
