@@ -22,7 +22,7 @@ fn build(scene: &Scene, fix_worst: Option<WorstOptions>) -> MeshBuild {
 
 /// On the bundled knot, fixing the worst spot keeps each level's triangles,
 /// lowers the Hausdorff distance of at least one level and raises none, and
-/// keeps the RMS within the fix's 1 %; and each reported error is the
+/// keeps the RMS within the fix's 2 %; and each reported error is the
 /// measurement of the level as written: the written primitive measured
 /// afresh against the welded input gives the same figures. Fails when the
 /// option does not reach the build, when a move is kept that raised the
@@ -48,7 +48,7 @@ fn the_fixed_levels_are_measured_as_written() {
             p.hausdorff()
         );
         assert!(
-            f.rms() <= 1.01 * p.rms(),
+            f.rms() <= 1.02 * p.rms(),
             "level {k}: RMS {} vs {}",
             f.rms(),
             p.rms()

@@ -41,10 +41,12 @@ pub struct WorstOptions {
 }
 
 impl WorstOptions {
-    /// Six rounds, RMS within 1 %.
+    /// Six rounds, RMS within 2 % (the quality issue's bound on what a change
+    /// may raise another figure by: at 1 % spot's 10 % level kept no round,
+    /// its RMS +1.3 %; docs/quality.md, "Session 29").
     pub const DEFAULT: WorstOptions = WorstOptions {
         rounds: 6,
-        rms_growth: 1.01,
+        rms_growth: 1.02,
     };
 }
 

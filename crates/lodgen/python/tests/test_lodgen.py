@@ -359,10 +359,10 @@ def test_fix_worst_lowers_the_worst_spot_and_needs_the_measurement():
     one = lodgen.simplify(v, f, levels=[0.1, 0.02], fix_worst=1)
     lower = 0
     for a, b, c in zip(plain.levels, fixed.levels, one.levels):
-        # same triangles; the Hausdorff distance never raised, RMS within 1 %
+        # same triangles; the Hausdorff distance never raised, RMS within 2 %
         np.testing.assert_array_equal(a.faces, b.faces)
         assert b.errors.hausdorff <= c.errors.hausdorff <= a.errors.hausdorff, (a, b, c)
-        assert b.errors.rms <= 1.01 * a.errors.rms, (a.errors, b.errors)
+        assert b.errors.rms <= 1.02 * a.errors.rms, (a.errors, b.errors)
         lower += b.errors.hausdorff < a.errors.hausdorff
     assert lower > 0
     with pytest.raises(lodgen.LodgenError, match="--fix-worst"):
