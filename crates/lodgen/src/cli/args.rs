@@ -187,8 +187,8 @@ pub struct BuildArgs {
     /// keeps the move only if the Hausdorff distance fell and the RMS stayed
     /// within 2 %; the fix stops at the first round that gains nothing.
     /// Each round costs one more measurement of each level and a local
-    /// search (the bunny's run: 0.26 s without, 0.67 s with one round,
-    /// 1.65 s with six); on the quality table six rounds lower the
+    /// search (the bunny's run: 0.23 s without, 0.62 s with one round,
+    /// 1.64 s with six); on the quality table six rounds lower the
     /// geometric mean of lodgen's Hausdorff distance over the best peer's
     /// from 0.895 to 0.759 (docs/quality.md, "Session 29"). The written
     /// levels and their
