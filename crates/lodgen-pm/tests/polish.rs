@@ -209,11 +209,14 @@ fn clusters_polish_is_closer_and_deterministic() {
 
 /// `fix_worst`: the error it returns is a measurement of the level as it
 /// leaves it, the Hausdorff distance never rises, the RMS stays within its
-/// bound, only positions change, and on a coarse torus the worst spot falls.
+/// bound, only positions change, and on a coarse knot the worst spot falls.
 #[test]
 fn fix_worst_lowers_the_maximum_and_reports_a_measurement() {
     use lodgen_pm::polish::{fix_worst, WorstOptions};
-    let (original, level) = level_of(&torus(1.0, 0.3, 48, 24), 0.1);
+    // (a noisy knot: a symmetric torus's level has its maximum at several places, equal to
+    // the last bit, and moving one leaves the figure where it was)
+    let knot = lodgen_pm::shapes::torus_knot(2, 3, 120, 16, 0.01);
+    let (original, level) = level_of(&knot, 0.1);
     let reference = Reference::new(MeshRef::new(&original.positions, &original.triangles)).unwrap();
     let mopts = MeasureOptions::DEFAULT;
     let mut fixed = level.clone();

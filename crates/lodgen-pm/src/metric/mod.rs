@@ -8,7 +8,7 @@
 //!   Z-order, `f32` SIMD box tests, exact `f64` answers); knows nothing about
 //!   sampling.
 //! * `sampling.rs`: where the measured points come from (stratified area
-//!   samples, vertices, centroids, the max-seeking search) and the chunked,
+//!   samples, vertices, centroids, edge midpoints, the max-seeking search) and the chunked,
 //!   in-order folds that measure them.
 //! * [`measure`](mod@measure): which points each direction measures and the
 //!   statistics, as a fraction or percentage of the original's bounding-box

@@ -5,7 +5,8 @@
 //! recess or a vertex left short of a tip, and moving that face's three
 //! corners a little lowers it with no effect elsewhere. Each round: the
 //! level is measured (the caller's [`MeasureOptions`]); the corners of that
-//! face move by a pattern search (each coordinate ± a step, from the
+//! face (of both faces when the maximum lies on their common edge, where
+//! the measurement's edge midpoints often find it) move by a pattern search (each coordinate ± a step, from the
 //! maximum's distance halved ten times, rounded to `f32`) that lowers the
 //! largest distance over the points around them: a grid of 28 points on
 //! each original triangle near the faces that move (within twice the
@@ -161,8 +162,18 @@ struct Near {
 
 fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
     let bvh = TriangleBvh::new(MeshRef::new(&level.positions, &level.triangles)).ok()?;
-    let (_, f, _) = bvh.closest_point(at)?;
+    let (d, f, _) = bvh.closest_point(at)?;
     let mut verts: Vec<u32> = level.triangles[f as usize].to_vec();
+    // (a maximum on an edge, where the measurement's edge midpoints often put it, moves
+    // with both faces of the edge: the four corners)
+    let touch = d.sqrt() + 1e-9 * h;
+    let pos = |v: u32| wide(level.positions[v as usize]);
+    let touching: Vec<usize> = (0..level.triangles.len())
+        .filter(|&t| dist(at, level.triangles[t].map(pos)) <= touch)
+        .collect();
+    if touching.len() == 2 {
+        verts.extend(touching.iter().flat_map(|&t| level.triangles[t]));
+    }
     verts.sort_unstable();
     verts.dedup();
     let (faces, rest): (Vec<[u32; 3]>, Vec<[u32; 3]>) = level

@@ -251,9 +251,9 @@ pub struct BuildArgs {
 
     /// Area samples per triangle of the larger mesh for the error
     /// measurement, up to 2,048 triangles; above that the count grows with
-    /// the square root (N·√(2,048·t)). Every vertex, the centroids of a
-    /// coarse level and a search from the farthest points add to the
-    /// maximum.
+    /// the square root (N·√(2,048·t)). Every vertex, the centroids and edge
+    /// midpoints of a coarse level and a search from the farthest points
+    /// add to the maximum.
     #[arg(long, value_name = "N", default_value_t = MeasureOptions::DEFAULT.samples_per_triangle, allow_negative_numbers = true)]
     pub samples: f64,
 
