@@ -168,8 +168,12 @@ fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
     // with both faces of the edge: the four corners)
     let touch = d.sqrt() + 1e-9 * h;
     let pos = |v: u32| wide(level.positions[v as usize]);
+    let corners = level.triangles[f as usize];
     let touching: Vec<usize> = (0..level.triangles.len())
-        .filter(|&t| dist(at, level.triangles[t].map(pos)) <= touch)
+        .filter(|&t| {
+            let tri = level.triangles[t];
+            tri.iter().any(|v| corners.contains(v)) && dist(at, tri.map(pos)) <= touch
+        })
         .collect();
     if touching.len() == 2 {
         verts.extend(touching.iter().flat_map(|&t| level.triangles[t]));
