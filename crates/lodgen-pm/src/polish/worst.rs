@@ -109,16 +109,26 @@ pub fn fix_worst(
             (e.b_to_a.at, e.b_to_a.max)
         };
         let Some(at) = at else { break };
-        let old = level.positions.clone();
-        if !improve(reference, original, level, at, h) {
-            break;
+        // (a maximum on an edge: its two faces' corners first, then, if that gains nothing,
+        // the nearest face's alone)
+        let mut gained = false;
+        for edge in [true, false] {
+            let old = level.positions.clone();
+            let (moved, on_edge) = improve(reference, original, level, at, h, edge);
+            if moved {
+                let e1 = measure(reference, level, mopts)?;
+                if e1.hausdorff() < e.hausdorff() && e1.rms() <= rms_cap {
+                    (e, gained) = (e1, true);
+                    kept += 1;
+                    break;
+                }
+                level.positions = old;
+            }
+            if !on_edge {
+                break;
+            }
         }
-        let e1 = measure(reference, level, mopts)?;
-        if e1.hausdorff() < e.hausdorff() && e1.rms() <= rms_cap {
-            e = e1;
-            kept += 1;
-        } else {
-            level.positions = old;
+        if !gained {
             break;
         }
     }
@@ -139,6 +149,8 @@ struct Local {
     a_points: Vec<(P, f64)>,
     /// Old unit normals of `faces` (flip test).
     normals: Vec<P>,
+    /// The point lies on an edge of two faces (whether or not both move).
+    on_edge: bool,
 }
 
 /// Divisions of a triangle's edge in the grid of judging points (28 per
@@ -160,7 +172,7 @@ struct Near {
     top: usize,
 }
 
-fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
+fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64, edge: bool) -> Option<Local> {
     let bvh = TriangleBvh::new(MeshRef::new(&level.positions, &level.triangles)).ok()?;
     let (d, f, _) = bvh.closest_point(at)?;
     let mut verts: Vec<u32> = level.triangles[f as usize].to_vec();
@@ -175,7 +187,8 @@ fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
             tri.iter().any(|v| corners.contains(v)) && dist(at, tri.map(pos)) <= touch
         })
         .collect();
-    if touching.len() == 2 {
+    let on_edge = touching.len() == 2;
+    if on_edge && edge {
         verts.extend(touching.iter().flat_map(|&t| level.triangles[t]));
     }
     verts.sort_unstable();
@@ -231,6 +244,7 @@ fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64) -> Option<Local> {
         faces,
         a_points,
         normals,
+        on_edge,
     })
 }
 
@@ -327,11 +341,19 @@ fn score(reference: &Reference, l: &Local, pos: &[P], cap: f64, near: &mut Near)
     worst
 }
 
-/// Pattern search over the local vertices' coordinates (f32 steps); true
-/// when the level moved.
-fn improve(reference: &Reference, original: MeshRef<'_>, level: &mut Mesh, at: P, h: f64) -> bool {
-    let Some(l) = local(original, level, at, h) else {
-        return false;
+/// Pattern search over the local vertices' coordinates (f32 steps), those
+/// of both faces when `at` lies on their edge and `edge` is set; whether
+/// the level moved, and whether `at` lies on an edge.
+fn improve(
+    reference: &Reference,
+    original: MeshRef<'_>,
+    level: &mut Mesh,
+    at: P,
+    h: f64,
+    edge: bool,
+) -> (bool, bool) {
+    let Some(l) = local(original, level, at, h, edge) else {
+        return (false, false);
     };
     let mut pos: Vec<P> = level.positions.iter().map(|&p| wide(p)).collect();
     let mut near = Near {
@@ -368,11 +390,11 @@ fn improve(reference: &Reference, original: MeshRef<'_>, level: &mut Mesh, at: P
         step *= 0.5;
     }
     if best >= start {
-        return false;
+        return (false, l.on_edge);
     }
     for &v in &l.verts {
         let p = pos[v as usize];
         level.positions[v as usize] = [p[0] as f32, p[1] as f32, p[2] as f32];
     }
-    true
+    (true, l.on_edge)
 }
