@@ -182,15 +182,17 @@ pub struct BuildArgs {
 
     /// Fix each written level's worst spot, in up to ROUNDS rounds (6 when
     /// no value is given: `--fix-worst` or `--fix-worst=3`). A round moves
-    /// the three corners of the level's face at its maximum distance to
-    /// lower the largest distance around them, measures the level again and
-    /// keeps the move only if the Hausdorff distance fell and the RMS stayed
-    /// within 2 %; the fix stops at the first round that gains nothing.
-    /// Each round costs one more measurement of each level and a local
-    /// search (the bunny's run: 0.23 s without, 0.62 s with one round,
-    /// 1.64 s with six); on the quality table six rounds lower the
-    /// geometric mean of lodgen's Hausdorff distance over the best peer's
-    /// from 0.895 to 0.759 (docs/quality.md, "Session 29"). The written
+    /// the three corners of the level's face at its maximum distance (the
+    /// four of two faces when it lies on their edge) to lower the largest
+    /// distance around them, measures the level again and keeps the move
+    /// only if the Hausdorff distance fell and the RMS stayed within 2 %;
+    /// the fix stops at the first round that gains nothing. Each round
+    /// costs one more measurement of each level and a local search (the
+    /// bunny's run: 0.28 s without, 1.87 s with six rounds); on the quality
+    /// table six rounds lower the geometric mean of lodgen's Hausdorff
+    /// distance over the best peer's from 0.895 to 0.746, and with
+    /// `--polish` every cell but one is at or under the best peer
+    /// (docs/quality.md, "Session 30"). The written
     /// levels and their
     /// reported errors are the fixed ones; the progressive mesh
     /// (`--progressive`) keeps the simplifier's positions. Needs the
