@@ -472,10 +472,7 @@ fn measure_from(
         };
         let found = max_above(order.len(), to, best.max2, centroid);
         samples += found.count;
-        if found.at.is_some() && found.max2 > best.max2 {
-            best.max2 = found.max2;
-            best.at = found.at;
-        }
+        raise(&mut best, &found);
         vertices.top = vertices.top.merge_top(&found.top);
         // and on its edges, where two of its faces meet at a crease that crosses the other
         // surface (bunny 10 %: the maximum halfway along an edge whose corners are 6× nearer,
@@ -502,10 +499,7 @@ fn measure_from(
         };
         let found = max_above(edges.len(), to, best.max2, midpoint);
         samples += found.count;
-        if found.at.is_some() && found.max2 > best.max2 {
-            best.max2 = found.max2;
-            best.at = found.at;
-        }
+        raise(&mut best, &found);
         vertices.top = vertices.top.merge_top(&found.top);
     }
     if plan.seek > 0 && area.count > 0 && best.max2 > 0.0 {
@@ -513,10 +507,7 @@ fn measure_from(
         let n = plan.seek.min(top.as_slice().len());
         let found = seek(from, to, &top.as_slice()[..n], best.max2, plan.seek_budget);
         samples += found.count;
-        if found.at.is_some() && found.max2 > best.max2 {
-            best.max2 = found.max2;
-            best.at = found.at;
-        }
+        raise(&mut best, &found);
     }
     Distance {
         max: best.max2.sqrt(),
@@ -525,6 +516,14 @@ fn measure_from(
         rms,
         samples,
         at: best.at,
+    }
+}
+
+/// `best`'s maximum and its place raised to `found`'s when `found` measured a farther point.
+fn raise(best: &mut Partial, found: &Partial) {
+    if found.at.is_some() && found.max2 > best.max2 {
+        best.max2 = found.max2;
+        best.at = found.at;
     }
 }
 
