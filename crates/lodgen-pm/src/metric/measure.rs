@@ -34,7 +34,7 @@ use super::bounded::{bounded_max, Tolerance};
 use super::bvh::TriangleBvh;
 pub use super::options::{MeasureOptions, Method};
 use super::sampling::{
-    area_samples, max_above, measure_points, seek, Partial, SampleSet, Site, MAX_CANDIDATES,
+    area_samples, max_above, measure_points, seek, Partial, SampleSet, Site, Top, MAX_CANDIDATES,
 };
 use super::triangle::widen;
 use super::{prefetch, zorder, MeshError, MeshRef, AHEAD};
@@ -454,53 +454,7 @@ fn measure_from(
     let mut samples = area.count + vertices.count;
     let mut vertices = vertices;
     if plan.coarse && area.count > 0 {
-        // maxima of a coarse mesh's distance sit inside its large triangles: one point each
-        let centroid = |i: usize, _: &mut usize| {
-            from.prefetch_along(order, i);
-            let tri = order[i];
-            let [a, b, c] = from.triangles[tri as usize].map(|v| widen(from.positions[v as usize]));
-            let p = std::array::from_fn(|j| (a[j] + b[j] + c[j]) / 3.0);
-            let third = 1.0 / 3.0;
-            (
-                p,
-                Site::Area {
-                    tri,
-                    u: third,
-                    v: third,
-                },
-            )
-        };
-        let found = max_above(order.len(), to, best.max2, centroid);
-        samples += found.count;
-        raise(&mut best, &found);
-        vertices.top = vertices.top.merge_top(&found.top);
-        // and on its edges, where two of its faces meet at a crease that crosses the other
-        // surface (bunny 10 %: the maximum halfway along an edge whose corners are 6× nearer,
-        // between the area samples): each edge's midpoint, once (the triangle that has it in
-        // ascending order; a border edge seen only descending is left out)
-        let edges: Vec<u32> = (0..3 * order.len() as u32)
-            .filter(|&e| {
-                let t = from.triangles[order[e as usize / 3] as usize];
-                t[e as usize % 3] < t[(e as usize + 1) % 3]
-            })
-            .collect();
-        let midpoint = |i: usize, _: &mut usize| {
-            let e = edges[i] as usize;
-            let tri = order[e / 3];
-            let t = from.triangles[tri as usize];
-            let (k, next) = (e % 3, (e + 1) % 3);
-            let (a, b) = (
-                widen(from.positions[t[k] as usize]),
-                widen(from.positions[t[next] as usize]),
-            );
-            let p = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
-            let (u, v) = [(0.5, 0.0), (0.5, 0.5), (0.0, 0.5)][k];
-            (p, Site::Area { tri, u, v })
-        };
-        let found = max_above(edges.len(), to, best.max2, midpoint);
-        samples += found.count;
-        raise(&mut best, &found);
-        vertices.top = vertices.top.merge_top(&found.top);
+        coarse_points(from, order, to, &mut best, &mut samples, &mut vertices.top);
     }
     if plan.seek > 0 && area.count > 0 && best.max2 > 0.0 {
         let top = area.top.merge_top(&vertices.top);
@@ -517,6 +471,65 @@ fn measure_from(
         samples,
         at: best.at,
     }
+}
+
+/// A coarse mesh's centroids and edge midpoints measured for the maximum, above `best` (which
+/// they raise, adding their count to `samples` and their farthest points to `top`).
+fn coarse_points(
+    from: MeshRef<'_>,
+    order: &[u32],
+    to: &TriangleBvh,
+    best: &mut Partial,
+    samples: &mut usize,
+    top: &mut Top,
+) {
+    // maxima of a coarse mesh's distance sit inside its large triangles: one point each
+    let centroid = |i: usize, _: &mut usize| {
+        from.prefetch_along(order, i);
+        let tri = order[i];
+        let [a, b, c] = from.triangles[tri as usize].map(|v| widen(from.positions[v as usize]));
+        let p = std::array::from_fn(|j| (a[j] + b[j] + c[j]) / 3.0);
+        let third = 1.0 / 3.0;
+        (
+            p,
+            Site::Area {
+                tri,
+                u: third,
+                v: third,
+            },
+        )
+    };
+    let found = max_above(order.len(), to, best.max2, centroid);
+    *samples += found.count;
+    raise(best, &found);
+    *top = top.merge_top(&found.top);
+    // and on its edges, where two of its faces meet at a crease that crosses the other
+    // surface (bunny 10 %: the maximum halfway along an edge whose corners are 6× nearer,
+    // between the area samples): each edge's midpoint, once (the triangle that has it in
+    // ascending order; a border edge seen only descending is left out)
+    let edges: Vec<u32> = (0..3 * order.len() as u32)
+        .filter(|&e| {
+            let t = from.triangles[order[e as usize / 3] as usize];
+            t[e as usize % 3] < t[(e as usize + 1) % 3]
+        })
+        .collect();
+    let midpoint = |i: usize, _: &mut usize| {
+        let e = edges[i] as usize;
+        let tri = order[e / 3];
+        let t = from.triangles[tri as usize];
+        let (k, next) = (e % 3, (e + 1) % 3);
+        let (a, b) = (
+            widen(from.positions[t[k] as usize]),
+            widen(from.positions[t[next] as usize]),
+        );
+        let p = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
+        let (u, v) = [(0.5, 0.0), (0.5, 0.5), (0.0, 0.5)][k];
+        (p, Site::Area { tri, u, v })
+    };
+    let found = max_above(edges.len(), to, best.max2, midpoint);
+    *samples += found.count;
+    raise(best, &found);
+    *top = top.merge_top(&found.top);
 }
 
 /// `best`'s maximum and its place raised to `found`'s when `found` measured a farther point.
