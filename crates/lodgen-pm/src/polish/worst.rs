@@ -6,17 +6,20 @@
 //! corners a little lowers it with no effect elsewhere. Each round: the
 //! level is measured (the caller's [`MeasureOptions`]); the corners of that
 //! face (of both faces when the maximum lies on their common edge, where
-//! the measurement's edge midpoints often find it) move by a pattern search (each coordinate ± a step, from the
-//! maximum's distance halved ten times, rounded to `f32`) that lowers the
-//! largest distance over the points around them: a grid of 28 points on
-//! each original triangle near the faces that move (within twice the
-//! maximum of their corners' box), against the level, and the same grid on
-//! each moving face, against the original; a move that turns a moving face
-//! by more than 60° is refused. Then the level is measured again and the
-//! move kept only when its Hausdorff distance fell and its RMS stays within
+//! the measurement's edge midpoints often find it) move by a pattern search
+//! (each coordinate ± a step, from the maximum's distance halved ten times,
+//! rounded to `f32`) that lowers the largest distance over the points
+//! around them: a grid of 28 points on each original triangle near the
+//! faces that move (within twice the maximum of their corners' box),
+//! against the level, and the same grid on each moving face, against the
+//! original; a move that turns a moving face by more than 60° is refused.
+//! Then the level is measured again and the move kept only when its
+//! Hausdorff distance fell and its RMS stays within
 //! [`WorstOptions::rms_growth`] of the unfixed level's; otherwise it is
-//! undone and the fix stops. So the error returned is a measurement of the
-//! level as it is left, never an estimate, and never above the unfixed one.
+//! undone, and the fix stops (after, for a maximum on an edge, the nearest
+//! face's three corners alone were tried the same way). So the error
+//! returned is a measurement of the level as it is left, never an
+//! estimate, and never above the unfixed one.
 //!
 //! Cost: every round measures the whole level once more (on the bunny a
 //! level's measurement is about a sixth of the command's CPU), so it is
