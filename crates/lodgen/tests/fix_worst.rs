@@ -100,3 +100,29 @@ fn without_the_measurement_nothing_is_fixed() {
         fixed[0].lod.levels[0].primitives[0].positions
     );
 }
+
+/// The levels are fixed side by side (`Measurer::fix_worst`), each on its
+/// own: one thread (the levels one after the other) and two give the same
+/// positions and the same reports. Fails when one level's fix reads or
+/// writes another's state.
+#[test]
+fn levels_fixed_side_by_side_equal_one_after_the_other() {
+    let scene = knot();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let b = pool.install(|| build(&scene, Some(WorstOptions::DEFAULT)));
+        let positions: Vec<Vec<[f32; 3]>> = b
+            .lod
+            .levels
+            .iter()
+            .map(|l| l.primitives[0].positions.clone())
+            .collect();
+        (positions, b.errors)
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one.0.len(), 2, "two levels expected");
+    assert_eq!(one, two);
+}

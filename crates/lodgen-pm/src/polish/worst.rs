@@ -216,6 +216,10 @@ fn local(original: MeshRef<'_>, level: &Mesh, at: P, h: f64, edge: bool) -> Opti
     let mut pts = Vec::new();
     for t in original.triangles {
         let c = [op[t[0] as usize], op[t[1] as usize], op[t[2] as usize]];
+        // (a triangle whose box misses the region's has no grid point in it)
+        if (0..3).any(|k| c.iter().all(|p| p[k] < lo[k]) || c.iter().all(|p| p[k] > hi[k])) {
+            continue;
+        }
         for i in 0..=GRID {
             for j in 0..=GRID - i {
                 let k = GRID - i - j;

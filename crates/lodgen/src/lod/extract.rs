@@ -230,6 +230,10 @@ pub(super) fn extract_levels(
     // the levels finest first refined to the finest, then undid most of it)
     let mut order: Vec<usize> = (0..splits.len()).collect();
     order.sort_by_key(|&i| splits[i]);
+    let mut fixed = match fix {
+        Some(fix) => fixed_levels(simplified, splits, &order, polish, fix)?,
+        None => Vec::new(),
+    };
     for i in order {
         let k = splits[i];
         if deferred && polish.is_none() && fix.is_none() {
@@ -248,18 +252,15 @@ pub(super) fn extract_levels(
         // (the written level moved: [`BuildOptions::polish`], then
         // [`BuildOptions::fix_worst`])
         let own = k < pm.len() && (polish.is_some() || fix.is_some());
-        if own {
+        let mut report = None;
+        if let Some((m, r)) = fixed.get_mut(i).and_then(Option::take) {
+            (moved, report) = (m, r);
+        } else if own {
             moved.clone_from(cursor.mesh());
-        }
-        if let (Some((original, popts)), true) = (polish, own) {
-            lodgen_pm::polish_clusters(original, &mut moved, &pm.representatives(k), popts);
-        }
-        let report = match (fix, own) {
-            (Some((measurer, mopts, wopts)), true) => {
-                measurer.fix_worst(&mut moved, k, mopts, wopts)?
+            if let Some((original, popts)) = polish {
+                lodgen_pm::polish_clusters(original, &mut moved, &pm.representatives(k), popts);
             }
-            _ => None,
-        };
+        }
         let m = if own { &moved } else { cursor.mesh() };
         if deferred {
             let material = mesh.primitives.first().and_then(|p| p.material);
@@ -284,6 +285,43 @@ pub(super) fn extract_levels(
         });
     }
     Ok(out.into_iter().flatten().collect())
+}
+
+/// The levels below the input at `splits` (visited in `order`), each
+/// polished when `polish` is set, with their worst spots fixed (`fix`) side
+/// by side ([`Measurer::fix_worst`]: the fix's pattern search runs on one
+/// thread, so the levels share the cores). Indexed like `splits`; `None` for a
+/// level at the input.
+#[allow(clippy::type_complexity)]
+fn fixed_levels(
+    simplified: &Simplified,
+    splits: &[usize],
+    order: &[usize],
+    polish: Option<(&Original<'_>, &lodgen_pm::PolishOptions)>,
+    (measurer, mopts, wopts): Fix<'_, '_>,
+) -> Result<Vec<Option<(Mesh, Option<ErrorReport>)>>, BuildError> {
+    let pm = &simplified.pm;
+    let mut cursor = pm.cursor();
+    let (mut at, mut levels) = (Vec::new(), Vec::new());
+    for &i in order {
+        let k = splits[i];
+        if k < pm.len() {
+            cursor.seek(k);
+            let mut m = cursor.mesh().clone();
+            if let Some((original, popts)) = polish {
+                lodgen_pm::polish_clusters(original, &mut m, &pm.representatives(k), popts);
+            }
+            at.push(i);
+            levels.push((k, m));
+        }
+    }
+    drop(cursor);
+    let reports = measurer.fix_worst(&mut levels, mopts, wopts)?;
+    let mut out: Vec<Option<(Mesh, Option<ErrorReport>)>> = splits.iter().map(|_| None).collect();
+    for ((i, (_, m)), r) in at.into_iter().zip(levels).zip(reports) {
+        out[i] = Some((m, r));
+    }
+    Ok(out)
 }
 
 /// The one primitive of a level of a mesh of one positions-only primitive

@@ -204,27 +204,37 @@ impl<'a> Measurer<'a> {
         r
     }
 
-    /// Fixes the worst spot of `m`, the mesh after `k` splits, in place
-    /// ([`lodgen_pm::polish::fix_worst`]) and returns the error of `m` as
-    /// it is left (measured); `None` when nothing is measured or `m` is the
+    /// Fixes the worst spot of each of `levels` (a mesh and its split
+    /// count) in place ([`lodgen_pm::polish::fix_worst`]), the levels side
+    /// by side (each fix is its own: the results are those of one level
+    /// after the other), and returns the error of each as it is left
+    /// (measured); `None` when nothing is measured or the level is the
     /// original (nothing to fix: its error is 0).
     pub(super) fn fix_worst(
         &self,
-        m: &mut Mesh,
-        k: usize,
+        levels: &mut [(usize, Mesh)],
         mopts: &MeasureOptions,
         wopts: &WorstOptions,
-    ) -> Result<Option<ErrorReport>, BuildError> {
-        if !self.measured || k >= self.splits {
-            return Ok(None);
+    ) -> Result<Vec<Option<ErrorReport>>, BuildError> {
+        if !self.measured || levels.iter().all(|&(k, _)| k >= self.splits) {
+            return Ok(levels.iter().map(|_| None).collect());
         }
         let reference = self.reference()?;
         let t = Instant::now();
         let full = MeshRef::new(&self.full.positions, &self.full.triangles);
-        let fixed = fix_worst(reference, full, m, mopts, wopts)
-            .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)));
+        let fixed = levels
+            .par_iter_mut()
+            .map(|(k, m)| {
+                if *k >= self.splits {
+                    return Ok(None);
+                }
+                fix_worst(reference, full, m, mopts, wopts)
+                    .map(|f| Some(f.error))
+                    .map_err(|e| measure_err(self.index, self.name, MeasureError::B(e)))
+            })
+            .collect();
         self.add_time(t.elapsed());
-        Ok(Some(fixed?.error))
+        fixed
     }
 
     /// The errors of `levels` (each a mesh and its split count, as for
