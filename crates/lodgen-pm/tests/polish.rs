@@ -252,8 +252,60 @@ fn fix_worst_lowers_the_maximum_and_reports_a_measurement() {
     let moved = (0..level.positions.len())
         .filter(|&v| level.positions[v] != fixed.positions[v])
         .count();
+    // (each round moves at most the four corners at each of its spots: the
+    // maximum, and the climbs' ends of both directions)
+    let spots = 1 + 2 * lodgen_pm::metric::Spots::CAPACITY;
     assert!(
-        moved > 0 && moved <= 3 * fix.kept as usize,
+        moved > 0 && moved <= 4 * spots * fix.kept as usize,
         "{moved} vertices moved"
     );
+}
+
+/// `fix_worst` on a level whose worst spot is repeated: a symmetric knot's
+/// level has its maximum at several places its symmetry makes equal, so a
+/// move at one of them leaves the level's Hausdorff distance where it was.
+/// The spots about as far as the maximum are fixed together in one round
+/// (`Spots`, from the measurement's max-seeking climbs): the distance falls
+/// and several separate places move. Fails when only the one spot is fixed.
+#[test]
+fn fix_worst_fixes_equal_spots_together() {
+    use lodgen_pm::polish::{fix_worst, WorstOptions};
+    let knot = lodgen_pm::shapes::torus_knot(2, 3, 120, 16, 0.0);
+    let (original, level) = level_of(&knot, 0.1);
+    let reference = Reference::new(MeshRef::new(&original.positions, &original.triangles)).unwrap();
+    let mopts = MeasureOptions::DEFAULT;
+    let before = reference
+        .measure(MeshRef::new(&level.positions, &level.triangles), &mopts)
+        .unwrap();
+    let far = [before.a_to_b, before.b_to_a]
+        .iter()
+        .flat_map(|d| d.spots.as_slice().to_vec())
+        .filter(|s| s.1 >= 0.95 * before.hausdorff())
+        .count();
+    assert!(far >= 2, "the level has {far} spots near its maximum");
+    let mut fixed = level.clone();
+    let opts = WorstOptions {
+        rounds: 1,
+        ..WorstOptions::DEFAULT
+    };
+    let fix = fix_worst(
+        &reference,
+        MeshRef::new(&original.positions, &original.triangles),
+        &mut fixed,
+        &mopts,
+        &opts,
+    )
+    .unwrap();
+    assert_eq!(fix.kept, 1, "no round kept");
+    // (one spot alone: 1.0152 % before and after, to the last bits; together: 0.9446 %)
+    assert!(
+        fix.error.hausdorff() < 0.99 * before.hausdorff(),
+        "H {} -> {}",
+        before.hausdorff_percent(),
+        fix.error.hausdorff_percent()
+    );
+    let moved: Vec<usize> = (0..level.positions.len())
+        .filter(|&v| level.positions[v] != fixed.positions[v])
+        .collect();
+    assert!(moved.len() > 4, "{} vertices moved", moved.len());
 }

@@ -70,6 +70,45 @@ pub struct Distance {
     /// The point of the sampled mesh where `max` was found (`None` when nothing was measured):
     /// where to look for the worst spot of a level.
     pub at: Option<[f64; 3]>,
+    /// Other far places: where the max-seeking search's climbs ended ([`Method::Sampled`]).
+    pub spots: Spots,
+}
+
+/// Where the max-seeking search's climbs ended, each with its distance, farthest first (equal
+/// distances in the search's order), at most [`Spots::CAPACITY`]: the local maxima near the
+/// farthest samples, which a level with several equal worst spots (a ring of them round a
+/// symmetric rim) has several of. Places found twice are kept twice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spots {
+    len: u8,
+    spots: [([f64; 3], f64); Spots::CAPACITY],
+}
+
+impl Spots {
+    /// The most kept.
+    pub const CAPACITY: usize = 16;
+
+    /// None.
+    pub const NONE: Spots = Spots {
+        len: 0,
+        spots: [([0.0; 3], 0.0); Spots::CAPACITY],
+    };
+
+    /// The farthest [`Spots::CAPACITY`] of `ends` (point, distance), farthest first.
+    fn farthest(mut ends: Vec<([f64; 3], f64)>) -> Spots {
+        ends.sort_by(|x, y| y.1.total_cmp(&x.1));
+        let mut out = Spots::NONE;
+        for (slot, &e) in out.spots.iter_mut().zip(&ends) {
+            *slot = e;
+            out.len += 1;
+        }
+        out
+    }
+
+    /// The spots, farthest first.
+    pub fn as_slice(&self) -> &[([f64; 3], f64)] {
+        &self.spots[..usize::from(self.len)]
+    }
 }
 
 impl Distance {
@@ -81,6 +120,7 @@ impl Distance {
         rms: 0.0,
         samples: 0,
         at: None,
+        spots: Spots::NONE,
     };
 }
 
@@ -431,6 +471,7 @@ fn measure_from(
             rms,
             samples: stats.count + max.queries,
             at: max.at.or(stats.at),
+            spots: Spots::NONE,
         };
     }
     let vertices = if plan.vertex_samples {
@@ -456,12 +497,14 @@ fn measure_from(
     if plan.coarse && area.count > 0 {
         coarse_points(from, order, to, &mut best, &mut samples, &mut vertices.top);
     }
+    let mut spots = Spots::NONE;
     if plan.seek > 0 && area.count > 0 && best.max2 > 0.0 {
         let top = area.top.merge_top(&vertices.top);
         let n = plan.seek.min(top.as_slice().len());
-        let found = seek(from, to, &top.as_slice()[..n], best.max2, plan.seek_budget);
+        let (found, ends) = seek(from, to, &top.as_slice()[..n], best.max2, plan.seek_budget);
         samples += found.count;
         raise(&mut best, &found);
+        spots = Spots::farthest(ends);
     }
     Distance {
         max: best.max2.sqrt(),
@@ -470,6 +513,7 @@ fn measure_from(
         rms,
         samples,
         at: best.at,
+        spots,
     }
 }
 

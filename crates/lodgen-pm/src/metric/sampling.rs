@@ -378,6 +378,9 @@ const STEPS: [(f64, f64); 6] = [
     (-1.0, 1.0),
 ];
 
+/// Where a climb of [`seek`] ended, and its distance.
+type End = ([f64; 3], f64);
+
 /// First step of the max-seeking search, in barycentric units (a quarter of the triangle).
 const FIRST_STEP: f64 = 0.25;
 
@@ -391,23 +394,24 @@ const LAST_STEP: f64 = 1.0 / 1024.0;
 /// until the step is below [`LAST_STEP`] or `budget` points were measured. The maxima of a
 /// level's distance sit on narrow features (a crease cut across, a tip) that random samples
 /// brush past: the search climbs from the sample that brushed them. `max2` is the largest
-/// distance found (at least `floor`), `count` the points measured.
+/// distance found (at least `floor`), `count` the points measured; with it, where each climb
+/// ended and its distance (in candidate order; none for a vertex in no triangle).
 pub(super) fn seek(
     from: MeshRef<'_>,
     to: &TriangleBvh,
     candidates: &[Candidate],
     floor: f64,
     budget: usize,
-) -> Partial {
+) -> (Partial, Vec<End>) {
     let start = Partial {
         max2: floor,
         ..Partial::ZERO
     };
     if to.is_empty() || candidates.is_empty() {
-        return start;
+        return (start, Vec::new());
     }
     let vertex_triangles = triangles_of(from, candidates);
-    let results: Vec<Partial> = candidates
+    let results: Vec<(Partial, Option<End>)> = candidates
         .par_iter()
         .zip(&vertex_triangles)
         .map(|(c, &found)| {
@@ -419,7 +423,7 @@ pub(super) fn seek(
                     1 => (tri, 1.0, 0.0),
                     _ => (tri, 0.0, 1.0),
                 },
-                (Site::Vertex(_), None) => return acc,
+                (Site::Vertex(_), None) => return (acc, None),
             };
             let [a, b, cc] =
                 from.triangles[tri as usize].map(|i| widen(from.positions[i as usize]));
@@ -455,10 +459,12 @@ pub(super) fn seek(
                 acc.max2 = d2;
                 acc.at = Some(at(u, v));
             }
-            acc
+            (acc, Some((at(u, v), d2.sqrt())))
         })
         .collect();
-    results.into_iter().fold(start, Partial::merge)
+    let ends = results.iter().filter_map(|r| r.1).collect();
+    let found = results.into_iter().map(|r| r.0).fold(start, Partial::merge);
+    (found, ends)
 }
 
 /// For each vertex candidate, the first triangle of `mesh` using that vertex and the corner it

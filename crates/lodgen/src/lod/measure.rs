@@ -17,7 +17,9 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use lodgen_pm::metric::{Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference};
+use lodgen_pm::metric::{
+    Distance, ErrorReport, MeasureError, MeasureOptions, MeshRef, Reference, Spots,
+};
 use lodgen_pm::polish::{fix_worst, WorstOptions};
 use lodgen_pm::{Mesh, ProgressiveMesh};
 
@@ -161,6 +163,7 @@ impl<'a> Measurer<'a> {
             rms: f64::NAN,
             samples: 0,
             at: None,
+            spots: Spots::NONE,
         };
         ErrorReport {
             a_to_b: d,
