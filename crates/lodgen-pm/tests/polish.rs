@@ -207,31 +207,48 @@ fn clusters_polish_is_closer_and_deterministic() {
     assert_closer_and_unflipped(&level, &polished, &before, &after, 0.85);
 }
 
+/// `level` (of `original`, which `reference` was made from) after
+/// `fix_worst` with `rounds` rounds (the default measurement), what the fix
+/// reported, and its options.
+fn fixed(
+    reference: &Reference,
+    original: &Mesh,
+    level: &Mesh,
+    rounds: u32,
+) -> (
+    Mesh,
+    lodgen_pm::polish::WorstFix,
+    lodgen_pm::polish::WorstOptions,
+) {
+    use lodgen_pm::polish::{fix_worst, WorstOptions};
+    let mut fixed = level.clone();
+    let opts = WorstOptions {
+        rounds,
+        ..WorstOptions::DEFAULT
+    };
+    let fix = fix_worst(
+        reference,
+        MeshRef::new(&original.positions, &original.triangles),
+        &mut fixed,
+        &MeasureOptions::DEFAULT,
+        &opts,
+    )
+    .unwrap();
+    (fixed, fix, opts)
+}
+
 /// `fix_worst`: the error it returns is a measurement of the level as it
 /// leaves it, the Hausdorff distance never rises, the RMS stays within its
 /// bound, only positions change, and on a coarse knot the worst spot falls.
 #[test]
 fn fix_worst_lowers_the_maximum_and_reports_a_measurement() {
-    use lodgen_pm::polish::{fix_worst, WorstOptions};
     // (a noisy knot: a symmetric torus's level has its maximum at several places, equal to
     // the last bit, and moving one leaves the figure where it was)
     let knot = lodgen_pm::shapes::torus_knot(2, 3, 120, 16, 0.01);
     let (original, level) = level_of(&knot, 0.1);
     let reference = Reference::new(MeshRef::new(&original.positions, &original.triangles)).unwrap();
     let mopts = MeasureOptions::DEFAULT;
-    let mut fixed = level.clone();
-    let opts = WorstOptions {
-        rounds: 3,
-        ..WorstOptions::DEFAULT
-    };
-    let fix = fix_worst(
-        &reference,
-        MeshRef::new(&original.positions, &original.triangles),
-        &mut fixed,
-        &mopts,
-        &opts,
-    )
-    .unwrap();
+    let (fixed, fix, opts) = fixed(&reference, &original, &level, 3);
     let again = reference
         .measure(MeshRef::new(&fixed.positions, &fixed.triangles), &mopts)
         .unwrap();
@@ -269,7 +286,6 @@ fn fix_worst_lowers_the_maximum_and_reports_a_measurement() {
 /// and several separate places move. Fails when only the one spot is fixed.
 #[test]
 fn fix_worst_fixes_equal_spots_together() {
-    use lodgen_pm::polish::{fix_worst, WorstOptions};
     let knot = lodgen_pm::shapes::torus_knot(2, 3, 120, 16, 0.0);
     let (original, level) = level_of(&knot, 0.1);
     let reference = Reference::new(MeshRef::new(&original.positions, &original.triangles)).unwrap();
@@ -283,19 +299,7 @@ fn fix_worst_fixes_equal_spots_together() {
         .filter(|s| s.1 >= 0.95 * before.hausdorff())
         .count();
     assert!(far >= 2, "the level has {far} spots near its maximum");
-    let mut fixed = level.clone();
-    let opts = WorstOptions {
-        rounds: 1,
-        ..WorstOptions::DEFAULT
-    };
-    let fix = fix_worst(
-        &reference,
-        MeshRef::new(&original.positions, &original.triangles),
-        &mut fixed,
-        &mopts,
-        &opts,
-    )
-    .unwrap();
+    let (fixed, fix, _) = fixed(&reference, &original, &level, 1);
     assert_eq!(fix.kept, 1, "no round kept");
     // (one spot alone: 1.0152 % before and after, to the last bits; together: 0.9446 %)
     assert!(
