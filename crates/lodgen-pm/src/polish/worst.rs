@@ -140,8 +140,12 @@ pub fn fix_worst(
         }
         // (then, when the level has other spots about as far, all of them at once: with
         // equal spots, fixing one leaves the level's figure to the others)
-        let group = spots(&e, at, h);
-        if gained.is_none() && group.len() > 1 {
+        let group = if gained.is_none() {
+            spots(&e, at, h)
+        } else {
+            Vec::new()
+        };
+        if group.len() > 1 {
             let old = level.positions.clone();
             let mut moved = false;
             for &p in &group {
