@@ -22,39 +22,44 @@ pub(crate) struct Contraction {
 }
 
 /// The triangles a contraction deletes: two for an interior edge, one on a
-/// border, none for a τ pair, inline (12 bytes, where a `SmallVec` took
-/// 32: the log holds one per contraction); `k ≥ 3` for an edge of `k`
-/// faces (rare: a chain of non-manifold edges), then `t[0]` is where they
-/// start in the log's [`Log::more_removed`]. Read them with
-/// [`Log::removed`].
+/// border, none for a τ pair, inline (8 bytes, where a `SmallVec` took 32:
+/// the log holds one per contraction, 1.9M in the clusters' logs of a
+/// 4.4M-triangle scan, copied once when they are merged); `k ≥ 3` for an
+/// edge of `k` faces (rare: a chain of non-manifold edges), then `t[0]` is
+/// where they start in the log's [`Log::more_removed`] and `t[1]` is
+/// `MANY | k`. Unused slots hold `u32::MAX` (triangle ids are below 2^30,
+/// `Mesh::validate`). Read them with [`Log::removed`].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Removed {
     t: [u32; 2],
-    n: u32,
 }
+
+/// `t[1]`'s flag of a [`Removed`] of three or more triangles.
+const MANY: u32 = 1 << 31;
 
 impl Removed {
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.n as usize
+        match self.t {
+            [u32::MAX, u32::MAX] => 0,
+            [_, u32::MAX] => 1,
+            [_, k] if k & MANY != 0 => (k & !MANY) as usize,
+            _ => 2,
+        }
     }
 
     /// No triangle.
-    pub const NONE: Removed = Removed {
-        t: [u32::MAX; 2],
-        n: 0,
-    };
+    pub const NONE: Removed = Removed { t: [u32::MAX; 2] };
 
     /// `ts` held inline: `None` for three or more (see [`Log::removed_of`]).
     pub fn inline(ts: &[u32]) -> Option<Removed> {
         let mut t = [u32::MAX; 2];
         t.get_mut(..ts.len())?.copy_from_slice(ts);
-        Some(Removed {
-            t,
-            n: ts.len() as u32,
-        })
+        Some(Removed { t })
     }
 }
+
+const _: () = assert!(std::mem::size_of::<Contraction>() == 40);
 
 /// The simplifiers' contraction log: the records, and one arena for all
 /// their moved corners (and wedge edits), so that logging a contraction
@@ -85,26 +90,22 @@ impl Log {
 
     /// `ts` as a record's [`Removed`] (three or more kept in this log).
     pub fn removed_of(&mut self, ts: &[u32]) -> Removed {
-        let mut t = [u32::MAX; 2];
-        if ts.len() <= 2 {
-            t[..ts.len()].copy_from_slice(ts);
-        } else {
-            t[0] = self.more_removed.len() as u32;
+        Removed::inline(ts).unwrap_or_else(|| {
+            let start = self.more_removed.len() as u32;
             self.more_removed.extend_from_slice(ts);
-        }
-        Removed {
-            t,
-            n: ts.len() as u32,
-        }
+            Removed {
+                t: [start, MANY | ts.len() as u32],
+            }
+        })
     }
 
     /// The triangles `c` deleted.
     #[inline]
     pub fn removed<'a>(&'a self, c: &'a Contraction) -> &'a [u32] {
-        let r = &c.removed;
-        match r.n {
-            0..=2 => &r.t[..r.n as usize],
-            n => &self.more_removed[r.t[0] as usize..(r.t[0] + n) as usize],
+        let (r, n) = (&c.removed, c.removed.len());
+        match n {
+            0..=2 => &r.t[..n],
+            _ => &self.more_removed[r.t[0] as usize..r.t[0] as usize + n],
         }
     }
 
@@ -255,7 +256,7 @@ impl Log {
     pub fn pop(&mut self) -> Option<Contraction> {
         let c = self.records.pop()?;
         self.corners.truncate(c.moved.start as usize);
-        if c.removed.n > 2 {
+        if c.removed.len() > 2 {
             self.more_removed.truncate(c.removed.t[0] as usize);
         }
         self.wedges

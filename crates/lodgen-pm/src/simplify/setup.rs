@@ -248,18 +248,16 @@ fn classify_all(
         Boundary::Weighted(w) => w,
         Boundary::Locked => 0.0,
     };
-    // Each face's plane once, not once per corner (the same sums, a
-    // third of the square roots and divisions).
-    let planes: Vec<Plane> = mesh
-        .triangles
-        .par_iter()
-        .map(|t| face_plane(&mesh.positions, t, opts.area_weighted))
-        .collect();
+    // Each face's plane is made at each of its corners, not once into a
+    // list: the same values (so the same sums), for a few more square
+    // roots and divisions, where the list (40 bytes per triangle) was the
+    // peak of a large run's preparation (bunny-4m: 178 MB over the 461 MB
+    // the simplifier then holds).
     type Flags = (Vec<bool>, (Vec<bool>, Vec<bool>));
     let (quadric, (boundary, (corner, complex))): (Vec<Quadric>, Flags) = (0..nv as u32)
         .into_par_iter()
         .map(|v| {
-            let i = classify_vertex(mesh, &planes, vtris.fan(v), v, opts, boundary_weight);
+            let i = classify_vertex(mesh, vtris.fan(v), v, opts, boundary_weight);
             (i.quadric, (i.boundary, (i.corner, i.complex)))
         })
         .unzip();
@@ -306,7 +304,6 @@ struct VertexInfo {
 /// border edge, the constraint plane through it (GH97 §6.1).
 fn classify_vertex(
     mesh: &Mesh,
-    planes: &[Plane],
     ts: &[u32],
     v: u32,
     opts: &SimplifyOptions,
@@ -314,7 +311,11 @@ fn classify_vertex(
 ) -> VertexInfo {
     let mut quadric = Quadric::default();
     for &t in ts {
-        let [nx, ny, nz, d, w] = planes[t as usize];
+        let [nx, ny, nz, d, w] = face_plane(
+            &mesh.positions,
+            &mesh.triangles[t as usize],
+            opts.area_weighted,
+        );
         if w > 0.0 {
             quadric += Quadric::from_plane(DVec3::new(nx, ny, nz), d, w);
         }

@@ -189,6 +189,10 @@ impl Simplifier {
         // read again before they are rebuilt at the end, and freeing them
         // first keeps them off the peak of the clusters' construction)
         self.vtris = Fans::default();
+        // (nor are the whole mesh's pass marks and link-test marks, 8
+        // bytes per vertex: zeroed again after the write-back)
+        self.pass.touched = Vec::new();
+        self.mark = Vec::new();
         // Memory: the clusters take the triangles and the interior
         // vertices' quadrics and positions; the whole mesh's are rebuilt
         // from theirs.
@@ -220,6 +224,8 @@ impl Simplifier {
         self.pos = vec![[0.0; 3]; nv];
         self.tris = vec![[0; 3]; nt];
         self.tri_alive = vec![false; nt];
+        self.pass.touched = vec![0; nv];
+        self.mark = vec![0; nv];
         let mut done = Vec::with_capacity(locals.len());
         for l in locals {
             done.push(self.write_back(l));
@@ -334,6 +340,9 @@ impl Simplifier {
         let mut verts: Vec<u32> = own.iter().flatten().copied().collect();
         verts.sort_unstable();
         verts.dedup();
+        // (a sixth of the corners: the rest of the block, written, would
+        // stay resident with every cluster, 44 MB at 4.4M triangles)
+        verts.shrink_to_fit();
         let local = |g: u32| verts.binary_search(&g).map_or(u32::MAX, |i| i as u32);
         for t in &mut own {
             *t = t.map(local);
@@ -518,6 +527,9 @@ fn round(
         .par_iter_mut()
         .map(|l| {
             let removed = walk(&mut l.s, &l.held, limit);
+            // (the next round's pass makes its own list: the clusters
+            // still walking then hold theirs beside the logs' growth)
+            l.s.pass.queue = Vec::new();
             l.rounds.push(l.s.log.records.len() as u32);
             if let Some(m) = meter {
                 m.remove(removed);
