@@ -185,8 +185,54 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// The end-to-end table; `huge` adds the bunny subdivided four times
-/// (17.8 M triangles, one run).
+/// One mesh's lodgen figures against issue 14's end-to-end targets.
+struct Measured {
+    id: &'static str,
+    /// Median wall time of lodgen, in seconds.
+    wall: f64,
+    /// Median of the run-by-run ratios lodgen / meshopt program.
+    ratio: f64,
+    /// Median peak resident set, in bytes.
+    peak: f64,
+    triangles: u64,
+}
+
+/// Issue 14's end-to-end targets, each with the figure measured and
+/// whether it is met: every mesh at ≤ 1.0× the meshopt program's wall
+/// time; the 4.4M mesh under 6 s and at ≤ 150 bytes per input triangle;
+/// the 17.8M mesh under 4 GB (10⁹ bytes).
+fn verdicts(rows: &[Measured]) -> Vec<String> {
+    let met = |ok: bool| if ok { "met" } else { "not met" };
+    let mut out = Vec::new();
+    for r in rows {
+        let mut items = vec![format!(
+            "wall ≤ 1.0× the meshopt program (median {:.2}): {}",
+            r.ratio,
+            met(r.ratio <= 1.0)
+        )];
+        if r.id == "bunny-4m" {
+            let per = r.peak / r.triangles.max(1) as f64;
+            items.push(format!(
+                "under 6 s ({:.2} s): {}",
+                r.wall,
+                met(r.wall < 6.0)
+            ));
+            items.push(format!(
+                "peak ≤ 150 B/triangle ({per:.0}): {}",
+                met(per <= 150.0)
+            ));
+        }
+        if r.id == "bunny-18m" {
+            let gb = r.peak / 1e9;
+            items.push(format!("peak under 4 GB ({gb:.2} GB): {}", met(gb < 4.0)));
+        }
+        out.push(format!("  {:<9} {}", r.id, items.join("; ")));
+    }
+    out
+}
+
+/// The end-to-end table, then issue 14's targets ([`verdicts`]); `huge`
+/// adds the bunny subdivided four times (17.8 M triangles, one run).
 pub fn run(exe: &Path, quick: bool, huge: bool) -> Result<()> {
     let lodgen = exe.with_file_name("lodgen");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
@@ -211,6 +257,7 @@ pub fn run(exe: &Path, quick: bool, huge: bool) -> Result<()> {
         "{:<9} {:<8} {:>10} {:>9} {:>9} {:>8} {:>9} {:>9}",
         "mesh", "tool", "triangles", "wall s", "cpu s", "peak MB", "B/tri", "H/RMS 2%"
     );
+    let mut rows = Vec::new();
     for &(id, runs) in meshes {
         let file = mesh_file(id)?;
         let glb = tmp.join("out.glb");
@@ -287,6 +334,13 @@ pub fn run(exe: &Path, quick: bool, huge: bool) -> Result<()> {
             );
         }
         let ratios: Vec<f64> = lw.iter().zip(&mw).map(|(a, b)| a / b).collect();
+        rows.push(Measured {
+            id,
+            wall: median(lw.clone()),
+            ratio: median(ratios.clone()),
+            peak: median(lp.clone()) * 1024.0,
+            triangles: tris,
+        });
         println!(
             "{id}: wall lodgen / meshopt program, run by run: {}",
             ratios
@@ -297,6 +351,10 @@ pub fn run(exe: &Path, quick: bool, huge: bool) -> Result<()> {
         );
     }
     let _ = std::fs::remove_dir_all(&tmp);
+    println!("issue 14's end-to-end targets (lodgen):");
+    for line in verdicts(&rows) {
+        println!("{line}");
+    }
     Ok(())
 }
 
@@ -307,4 +365,40 @@ fn tempfile_dir() -> Result<PathBuf> {
         .join(format!("bench-e2e-{}", std::process::id()));
     std::fs::create_dir_all(&d)?;
     Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each target is judged on its own figure: fails if the 4.4M bound is
+    /// read in KiB instead of bytes, or a ratio over 1.0 passes.
+    #[test]
+    fn verdicts_judge_each_target() {
+        let row = |id, wall, ratio, peak, triangles| Measured {
+            id,
+            wall,
+            ratio,
+            peak,
+            triangles,
+        };
+        let v = verdicts(&[
+            row("bunny", 0.3, 1.62, 3.2e7, 69_451),
+            row("bunny-4m", 17.4, 0.73, 140.0 * 4_444_864.0, 4_444_864),
+            row("bunny-18m", 86.0, 0.91, 2.34e9, 17_779_456),
+        ]);
+        assert_eq!(v.len(), 3);
+        assert!(v[0].contains("(median 1.62): not met"), "{}", v[0]);
+        assert!(v[1].contains("(median 0.73): met"), "{}", v[1]);
+        assert!(v[1].contains("under 6 s (17.40 s): not met"), "{}", v[1]);
+        assert!(
+            v[1].contains("peak ≤ 150 B/triangle (140): met"),
+            "{}",
+            v[1]
+        );
+        assert!(v[2].contains("peak under 4 GB (2.34 GB): met"), "{}", v[2]);
+        let over = verdicts(&[row("bunny-4m", 5.0, 0.5, 151.0 * 4_444_864.0, 4_444_864)]);
+        assert!(over[0].contains("(151): not met"), "{}", over[0]);
+        assert!(over[0].contains("under 6 s (5.00 s): met"), "{}", over[0]);
+    }
 }
