@@ -264,3 +264,43 @@ impl Log {
         Some(c)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every count of deleted triangles reads back as written, inline (0,
+    /// 1, 2, ids up to 2^30 − 1) or in `more_removed` (3 and more, one
+    /// after another), and `pop` gives the list's tail back. Fails when
+    /// the 8-byte encoding confuses two inline triangles with a list.
+    #[test]
+    fn removed_triangles_read_back() {
+        let top = (1u32 << 30) - 1;
+        let cases: Vec<Vec<u32>> = vec![
+            vec![],
+            vec![0],
+            vec![top],
+            vec![7, top],
+            vec![top, 0],
+            vec![1, 2, 3],
+            vec![top, 5, 9, 11, 4],
+            vec![8, 6],
+        ];
+        let mut log = Log::with_capacity(cases.len());
+        for (i, ts) in cases.iter().enumerate() {
+            let c = log.begin(i as u32, 99, [0.0; 3], ts, 0.5);
+            assert_eq!(c.removed.len(), ts.len());
+            log.records.push(c);
+        }
+        for (c, ts) in log.records.iter().zip(&cases) {
+            assert_eq!(log.removed(c), &ts[..]);
+        }
+        assert_eq!(log.more_removed.len(), 8);
+        // popped newest first: the lists of 3 and 5 leave `more_removed`
+        for ts in cases.iter().rev() {
+            let c = log.pop().unwrap();
+            assert_eq!(c.removed.len(), ts.len());
+        }
+        assert!(log.more_removed.is_empty());
+    }
+}
