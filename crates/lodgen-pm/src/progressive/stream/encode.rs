@@ -242,7 +242,7 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
     let v0 = (pm.base.positions.len() + i) as u32;
     debug_assert_eq!(s.v0, v0);
     let ring = st.topo.ring(&st.triangles, s.v1);
-    let codes: Vec<u8> = s
+    let codes: topo::Small<u8> = s
         .faces
         .iter()
         .map(|&f| topo::face_code(f, v0, s.v1, &ring))
@@ -273,7 +273,7 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
         st.topo.add_face(&mut st.triangles, f);
     }
     let held = st.topo.corners(&st.triangles, s.v1);
-    let edited: Vec<bool> = held
+    let edited: topo::Small<bool> = held
         .iter()
         .map(|c| s.corners.binary_search(c).is_ok())
         .collect();
@@ -289,7 +289,7 @@ fn record(pm: &ProgressiveMesh, i: usize, st: &mut State, cols: &mut TopoColumns
         &held,
         &mut cols.predicted,
     );
-    if cols.predicted != edited {
+    if cols.predicted[..] != edited[..] {
         cols.codes.last_mut().expect("pushed above")[3] = 1;
         for &e in &edited {
             cols.mask.push(e);

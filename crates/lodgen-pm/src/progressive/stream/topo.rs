@@ -5,6 +5,11 @@
 //! the corners it holds (after the new faces are appended).
 
 use crate::progressive::Corner;
+use smallvec::SmallVec;
+
+/// A split's ring or held corners, inline (a fan has some six triangles:
+/// one allocation per list and split was a tenth of a stream's encoding).
+pub(super) type Small<T> = SmallVec<[T; 24]>;
 
 /// Face code for "the three corners follow in the escape column".
 pub(super) const FACE_ESCAPE: u8 = 255;
@@ -40,8 +45,8 @@ impl Topo {
     }
 
     /// The vertices sharing a triangle with `v`, ascending, `v` excluded.
-    pub fn ring(&self, triangles: &[[u32; 3]], v: u32) -> Vec<u32> {
-        let mut ring: Vec<u32> = self.fans[v as usize]
+    pub fn ring(&self, triangles: &[[u32; 3]], v: u32) -> Small<u32> {
+        let mut ring: Small<u32> = self.fans[v as usize]
             .iter()
             .flat_map(|&t| triangles[t as usize])
             .filter(|&u| u != v)
@@ -67,8 +72,8 @@ impl Topo {
     }
 
     /// Every corner holding `v`, ascending (triangle, slot).
-    pub fn corners(&self, triangles: &[[u32; 3]], v: u32) -> Vec<Corner> {
-        let mut out = Vec::new();
+    pub fn corners(&self, triangles: &[[u32; 3]], v: u32) -> Small<Corner> {
+        let mut out = Small::new();
         for &t in &self.fans[v as usize] {
             for slot in 0..3u8 {
                 if triangles[t as usize][slot as usize] == v {
@@ -198,10 +203,10 @@ pub(super) fn predict_mask(
     held: &[Corner],
     out: &mut Vec<bool>,
 ) {
-    let old: Vec<u32> = fan.iter().copied().filter(|&t| t < first).collect();
-    let mut taken = vec![false; old.len()];
-    let mut wings: Vec<u32> = Vec::with_capacity(2);
-    let mut queue: Vec<usize> = Vec::new();
+    let old: Small<u32> = fan.iter().copied().filter(|&t| t < first).collect();
+    let mut taken: Small<bool> = smallvec::smallvec![false; old.len()];
+    let mut wings: SmallVec<[u32; 2]> = SmallVec::new();
+    let mut queue: Small<usize> = Small::new();
     for f in faces {
         if !(f.contains(&v0) && f.contains(&v1)) {
             continue;
