@@ -266,7 +266,7 @@ fn replay_wedges(
     ws: &mut WedgeState,
     wc: &mut WedgeColumns,
     layout: &WedgeLayout,
-    (tri, fans, rec): (&[[u32; 3]], &[Vec<u32>], Rec),
+    (tri, fans, rec): (&[[u32; 3]], &[topo::Fan], Rec),
     first: usize,
     corners: &Corners,
 ) -> Result<SplitWedges, StreamError> {

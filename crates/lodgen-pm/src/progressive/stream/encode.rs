@@ -88,7 +88,7 @@ impl WedgeWriter<'_> {
     fn put(
         &mut self,
         tri: &[[u32; 3]],
-        fans: &[Vec<u32>],
+        fans: &[topo::Fan],
         t: u32,
         s: usize,
         w: u32,

@@ -11,6 +11,11 @@ use smallvec::SmallVec;
 /// one allocation per list and split was a tenth of a stream's encoding).
 pub(super) type Small<T> = SmallVec<[T; 24]>;
 
+/// A vertex's triangles, inline up to eight (most fans: one allocation
+/// per vertex the splits add was the encoder's and decoder's largest
+/// allocator traffic).
+pub(super) type Fan = SmallVec<[u32; 8]>;
+
 /// Face code for "the three corners follow in the escape column".
 pub(super) const FACE_ESCAPE: u8 = 255;
 /// Ring positions a one-byte face code can name (`6 · 42 = 252`).
@@ -28,12 +33,12 @@ const PERMS: [[usize; 3]; 6] = [
 /// Triangles and vertex → triangle fans (each fan ascending, no repeats).
 #[derive(Clone, Debug, Default)]
 pub(super) struct Topo {
-    pub fans: Vec<Vec<u32>>,
+    pub fans: Vec<Fan>,
 }
 
 impl Topo {
     pub fn new(vertices: usize, triangles: &[[u32; 3]]) -> Topo {
-        let mut fans = vec![Vec::new(); vertices];
+        let mut fans = vec![Fan::new(); vertices];
         for (t, tri) in triangles.iter().enumerate() {
             for (i, &v) in tri.iter().enumerate() {
                 if !tri[..i].contains(&v) {
@@ -57,7 +62,7 @@ impl Topo {
     }
 
     pub fn add_vertex(&mut self) {
-        self.fans.push(Vec::new());
+        self.fans.push(Fan::new());
     }
 
     /// Append face `f` (its vertices exist).

@@ -86,7 +86,7 @@ impl Shared {
     pub fn candidates(
         &mut self,
         tri: &[[u32; 3]],
-        fans: &[Vec<u32>],
+        fans: &[super::topo::Fan],
         t: u32,
         s: usize,
         before: Option<u32>,
@@ -344,7 +344,7 @@ impl WedgeColumns {
         ws: &mut WedgeState,
         layout: &WedgeLayout,
         tri: &[[u32; 3]],
-        fans: &[Vec<u32>],
+        fans: &[super::topo::Fan],
         (t, s): (u32, usize),
         before: Option<u32>,
         rec: Option<Rec>,
