@@ -222,6 +222,12 @@ pub fn run(args: &[String]) -> Result<()> {
     if args.iter().any(|a| a == "--python") {
         return crate::py_bench::run_python(args);
     }
+    if let Some(other) = args
+        .iter()
+        .find(|a| !matches!(a.as_str(), "--quick" | "--e2e" | "--huge"))
+    {
+        bail!("unknown bench option {other:?} (expected --quick, --e2e, --huge or --python)");
+    }
     if crate::rerun_in_release("bench", args)? {
         return Ok(());
     }

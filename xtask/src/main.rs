@@ -56,6 +56,12 @@ fn main() -> anyhow::Result<()> {
         eprintln!("{USAGE}");
         std::process::exit(2);
     };
+    // `cargo xtask TASK --help` prints the usage instead of running TASK (`test` passes its
+    // arguments on to `cargo test`, whose own help they then ask for).
+    if task != "test" && rest.iter().any(|a| a == "-h" || a == "--help") {
+        println!("{USAGE}");
+        return Ok(());
+    }
     match task.as_str() {
         "test" => test::run(rest),
         "draco" => draco::run(rest),

@@ -86,6 +86,12 @@ fn bench_python(root: &Path) -> Result<PathBuf> {
 }
 
 pub fn run_python(args: &[String]) -> Result<()> {
+    if let Some(other) = args
+        .iter()
+        .find(|a| !matches!(a.as_str(), "--python" | "--quick" | "--batch"))
+    {
+        anyhow::bail!("unknown bench --python option {other:?} (expected --quick or --batch)");
+    }
     let quick = args.iter().any(|a| a == "--quick");
     let batch = args.iter().any(|a| a == "--batch");
     let root = crate::workspace_root();
