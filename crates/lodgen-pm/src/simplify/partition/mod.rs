@@ -418,6 +418,8 @@ impl Simplifier {
             attributes: None,
             meter: None,
             lifted,
+            watching: None,
+            watch_below: 0,
         }
     }
 
