@@ -57,7 +57,7 @@ pub use progressive::{
 };
 pub use simplify::{
     Boundary, Meter, PhaseTimes, Placement, Rejected, Rejections, Schedule, Simplifier,
-    SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, TopologyChange, Watch,
+    SimplifyOptions, Snapshot, Stage, Stats, StopReason, Tau, TopologyChange,
     DEFAULT_BOUNDARY_WEIGHT, DEFAULT_CLUSTER_TRIANGLES, DEFAULT_PASS_FACTOR,
     DEFAULT_REACH_FACES_FACTOR, DEFAULT_REACH_FACTOR,
 };
@@ -185,8 +185,7 @@ pub fn simplify_with_wedges_metered(
 ) -> Result<Simplified, MeshError> {
     check_attributes(positions, attributes, dims, meter.as_deref())?;
     let prepared = prepare(positions, indices)?;
-    let hooks = Hooks { meter, watch: None };
-    run_again(prepared, positions, indices, attributes, dims, opts, hooks)
+    run_again(prepared, positions, indices, attributes, dims, opts, meter)
 }
 
 /// [`simplify_with_wedges_metered`] in two steps: this one prepares (weld,
@@ -208,8 +207,7 @@ pub fn prepare_with_wedges(
 ) -> Result<Ready, MeshError> {
     check_attributes(positions, attributes, dims, meter.as_deref())?;
     let prepared = prepare(positions, indices)?;
-    let hooks = Hooks { meter, watch: None };
-    ready(prepared, indices, attributes, dims, opts, &hooks)
+    ready(prepared, indices, attributes, dims, opts, meter)
 }
 
 /// [`simplify_with_wedges_metered`], with `beside` run on another thread
@@ -219,10 +217,7 @@ pub fn prepare_with_wedges(
 /// `pm.vertex_origin` and `pm.triangle_origin` map one to the other).
 /// For work that needs only the input, such as the hierarchy its levels
 /// will be measured against, on a core the simplification leaves idle most
-/// of the time. `beside` is not run when the input is rejected. With
-/// `watch`, the walk hands its mesh over at the watch's counts
-/// ([`Watch`]; `beside` may wait for them: `beside` starts only after the
-/// simplification when the pool has one thread).
+/// of the time. `beside` is not run when the input is rejected.
 #[allow(clippy::too_many_arguments)]
 pub fn simplify_with_wedges_beside<'m, R: Send>(
     positions: &[[f32; 3]],
@@ -230,18 +225,15 @@ pub fn simplify_with_wedges_beside<'m, R: Send>(
     attributes: &[f32],
     dims: usize,
     opts: &SimplifyOptions,
-    (meter, watch): (Option<std::sync::Arc<Meter>>, Option<std::sync::Arc<Watch>>),
+    meter: Option<std::sync::Arc<Meter>>,
     welded: &'m mut Option<Mesh>,
     beside: impl FnOnce(&'m Mesh) -> R + Send,
 ) -> Result<(Simplified, R), MeshError> {
     check_attributes(positions, attributes, dims, meter.as_deref())?;
     let prepared = prepare(positions, indices)?;
     let copy: &'m Mesh = welded.insert(prepared.mesh.clone());
-    let hooks = Hooks { meter, watch };
-    // (the simplification first: on one thread `beside` runs after it, when
-    // the watch's states are all handed over and its hand dropped)
     let (simplified, r) = rayon::join(
-        || run_again(prepared, positions, indices, attributes, dims, opts, hooks),
+        || run_again(prepared, positions, indices, attributes, dims, opts, meter),
         || beside(copy),
     );
     Ok((simplified?, r))
@@ -268,13 +260,6 @@ fn check_attributes(
     Ok(())
 }
 
-/// What a simplification reports to while it runs: the progress
-/// [`Meter`] and the [`Watch`] of its walk.
-struct Hooks {
-    meter: Option<std::sync::Arc<Meter>>,
-    watch: Option<std::sync::Arc<Watch>>,
-}
-
 /// [`ready`] and run, and with [`TopologyChange::WhenShort`] again from
 /// the input (prepared again) when the topology stopped it above its
 /// target.
@@ -285,15 +270,15 @@ fn run_again(
     attributes: &[f32],
     dims: usize,
     opts: &SimplifyOptions,
-    hooks: Hooks,
+    meter: Option<std::sync::Arc<Meter>>,
 ) -> Result<Simplified, MeshError> {
-    let out = ready(prepared, indices, attributes, dims, opts, &hooks)?.run();
+    let out = ready(prepared, indices, attributes, dims, opts, meter.clone())?.run();
     if !short_on_topology(opts, &out) {
         return Ok(out);
     }
     drop(out);
     let prepared = prepare(positions, indices)?;
-    Ok(ready(prepared, indices, attributes, dims, &again(opts), &hooks)?.run())
+    Ok(ready(prepared, indices, attributes, dims, &again(opts), meter)?.run())
 }
 
 /// The simplification of the wedged entry points, from the prepared mesh,
@@ -304,7 +289,7 @@ fn ready(
     attributes: &[f32],
     dims: usize,
     opts: &SimplifyOptions,
-    hooks: &Hooks,
+    meter: Option<std::sync::Arc<Meter>>,
 ) -> Result<Ready, MeshError> {
     let mut s = Simplifier::from_mesh(prepared.mesh, opts)?;
     let wedges = prepared
@@ -324,11 +309,8 @@ fn ready(
             .collect();
         s.set_attributes(values, dims);
     }
-    if let Some(m) = &hooks.meter {
-        s.set_meter(m.clone());
-    }
-    if let Some(w) = &hooks.watch {
-        s.set_watch(w.clone());
+    if let Some(m) = meter {
+        s.set_meter(m);
     }
     Ok(Ready {
         s,

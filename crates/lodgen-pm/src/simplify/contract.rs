@@ -91,9 +91,6 @@ impl Simplifier {
         if self.opts.schedule == Schedule::Greedy {
             self.requeue(v1);
         }
-        if self.live_tris < self.watch_below {
-            self.hand_over();
-        }
     }
 
     /// `v1`'s new fan: its live triangles, then `v0`'s moved ones (whose

@@ -49,7 +49,6 @@ mod schedule;
 mod setup;
 pub(crate) mod stats;
 mod walk;
-mod watch;
 
 pub use legality::{Rejected, DEGENERATE_AREA_RATIO_SQ, FLIP_MIN_COS};
 pub use meter::{Meter, Stage};
@@ -59,7 +58,6 @@ pub use options::{
     DEFAULT_REACH_FACTOR,
 };
 pub use stats::{PhaseTimes, Rejections, Snapshot, Stats, StopReason};
-pub use watch::Watch;
 
 use crate::mesh::adjacency::Fans;
 use crate::mesh::{Mesh, MeshError};
@@ -158,11 +156,6 @@ pub struct Simplifier {
     /// Vertices whose position the log records lifted
     /// ([`SimplifyOptions::lift`], `lift.rs`).
     lifted: lift::Lifted,
-    /// The walk's states handed to a caller ([`Simplifier::set_watch`]).
-    watching: Option<watch::Watching>,
-    /// A contraction that takes the live triangles below this hands the
-    /// mesh over (`watch.rs`); 0 when nothing is watched.
-    watch_below: usize,
 }
 
 /// A contraction that passed [`Simplifier::check`]: `v0` goes into `v1`,
@@ -417,7 +410,6 @@ impl Simplifier {
             self.stats.time.collapse += t0.elapsed();
             return StopReason::Cancelled;
         }
-        self.arm_watch();
         // (batched on one thread too: the walk then plans a batch ahead
         // with its prefetches, 10 % less CPU time than step by step)
         let batched = matches!(self.opts.schedule, Schedule::Passes { .. });
@@ -470,9 +462,6 @@ impl Simplifier {
         // the live vertices' positions as the log records them (before
         // their quadrics are freed)
         self.commit_lifts();
-        // (the watch's hand, which may hold a channel its receiver waits on)
-        self.watching = None;
-        self.watch_below = 0;
         // free what the log's renumbering does not read before it
         // allocates the progressive mesh (peak memory)
         self.pass = Pass::default();

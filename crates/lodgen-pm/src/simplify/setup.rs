@@ -91,8 +91,6 @@ impl Simplifier {
             attributes: None,
             meter: None,
             lifted: super::lift::Lifted::new(nv, opts.lift),
-            watching: None,
-            watch_below: 0,
         };
         if opts.boundary == Boundary::Locked {
             for v in 0..nv {

@@ -3,7 +3,6 @@
 //! and extract → screen coverages. [`MeshBuild`] is what comes out.
 
 use std::borrow::Cow;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
@@ -22,7 +21,6 @@ use super::measure::Measurer;
 use super::options::{BuildOptions, LevelHook, LevelRequest, Progress};
 use super::reference::{inverse, measurer_in_input_order, Origins};
 use super::select::select_splits;
-use super::walk::{measure_reached, take_reports, watch_levels, Reached};
 use super::wedges::{prepare_wedged, simplify_wedged, simplify_wedged_beside};
 
 /// What happened to one mesh, beside its [`LodMesh`].
@@ -324,8 +322,6 @@ fn build_mesh(
     let pm = &simplified.pm;
     let mut full = pm.mesh_at_splits(pm.len());
     let measurer = Measurer::new(pm, &full, opts.measured, index, &name);
-    let mut early = early;
-    let reached = early.as_mut().map(|e| std::mem::take(&mut e.reached));
     if let Some((r, took)) = early.and_then(|e| e.renumbered(pm, &full)) {
         measurer.set_reference(r, took);
     }
@@ -341,8 +337,7 @@ fn build_mesh(
     let (splits, notes) = or_restore!(selected, freed, mesh, &full);
     let what = (side_by_side, freed);
     let extracted = extract_all(mesh, &flat, &simplified, &splits, opts, &measurer, what);
-    let mut extracted = or_restore!(extracted, freed, mesh, &full);
-    take_reports(&mut extracted, reached.as_deref().unwrap_or_default());
+    let extracted = or_restore!(extracted, freed, mesh, &full);
     drop(flat);
     if let (false, false, Cow::Owned(m)) = (freed, opts.keep_input, &mut *mesh) {
         if measurable(&full, &extracted) {
@@ -520,10 +515,8 @@ fn simplify_options(opts: &BuildOptions, full_tris: usize) -> Result<SimplifyOpt
 /// welded input ([`simplify`] with a slot for it).
 struct Early<'m> {
     reference: Result<Reference<'m>, lodgen_pm::metric::MeshError>,
-    /// Wall time of the hierarchy's build and of the levels' measurement.
+    /// Wall time of the hierarchy's build.
     took: Duration,
-    /// The levels the walk handed over, measured (`walk.rs`).
-    reached: Vec<Reached>,
 }
 
 impl Early<'_> {
@@ -575,31 +568,15 @@ fn simplify<'m>(
     let r = match welded {
         None => simplify_wedged(mesh, flat, sopts, weights, meter).map(|s| (s, None)),
         Some(slot) => {
-            // (levels the polish or the fix moves are measured once moved)
-            let watched = (opts.polish.is_none() && opts.fix_worst.is_none())
-                .then(|| watch_levels(opts))
-                .flatten();
-            let watch = watched.as_ref().map(|w| Arc::clone(&w.watch));
-            let states = watched.map(|w| (Arc::downgrade(&w.watch), w.states));
-            let mopts = &opts.measure;
             let build = |welded: &'m Mesh| {
                 let t = Instant::now();
                 let reference = Reference::new(MeshRef::new(&welded.positions, &welded.triangles));
-                let mut took = t.elapsed();
-                let mut reached = Vec::new();
-                if let (Ok(r), Some(states)) = (&reference, states) {
-                    let spent;
-                    (reached, spent) = measure_reached(r, states, mopts);
-                    took += spent;
-                }
                 Early {
                     reference,
-                    took,
-                    reached,
+                    took: t.elapsed(),
                 }
             };
-            let hooks = (meter, watch);
-            simplify_wedged_beside(mesh, flat, sopts, weights, hooks, slot, build)
+            simplify_wedged_beside(mesh, flat, sopts, weights, meter, slot, build)
                 .map(|(s, e)| (s, Some(e)))
         }
     };
@@ -619,8 +596,7 @@ fn measurable(full: &Mesh, extracted: &[Extracted]) -> bool {
 }
 
 /// Every extracted level measured (its mesh freed once it is; with
-/// `side_by_side`, all levels not measured yet at once, their meshes freed
-/// together), then
+/// `side_by_side`, all levels at once, their meshes freed together), then
 /// the screen coverages from the measured errors. `full` stands for a level
 /// without a mesh (the original, or not measured: its error does not read
 /// it). With `ready` (the hook of [`BuildOptions::level_ready`] and the
@@ -646,14 +622,12 @@ fn measure_levels(
             f(mesh, level, primitives);
         }
     };
-    // (levels whose worst spot was fixed were measured then, and levels
-    // the walk handed over during it: `walk.rs`)
-    if side_by_side && extracted.iter().any(|l| l.report.is_none()) {
+    // (levels whose worst spot was fixed were measured then)
+    if side_by_side && extracted.iter().all(|l| l.report.is_none()) {
         measuring(0, splits.len());
         let levels: Vec<(&Mesh, usize)> = extracted
             .iter()
             .zip(splits)
-            .filter(|(l, _)| l.report.is_none())
             .map(|(l, &k)| (l.mesh.as_ref().unwrap_or(full), k))
             .collect();
         reports = match ready {

@@ -47,7 +47,6 @@ mod reference;
 mod select;
 mod stream;
 mod unit;
-mod walk;
 mod wedges;
 
 pub use build::{build_lods, build_lods_isolated, build_one, BuildTimes, MeshBuild, SceneBuild};

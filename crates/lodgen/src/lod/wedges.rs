@@ -222,7 +222,7 @@ pub(super) fn simplify_wedged_beside<'m, R: Send>(
     flat: &Flat,
     opts: &SimplifyOptions,
     weights: &AttributeWeights,
-    hooks: (Option<Arc<Meter>>, Option<Arc<lodgen_pm::Watch>>),
+    meter: Option<Arc<Meter>>,
     welded: &'m mut Option<Mesh>,
     beside: impl FnOnce(&'m Mesh) -> R + Send,
 ) -> Result<(Simplified, R), MeshError> {
@@ -234,7 +234,7 @@ pub(super) fn simplify_wedged_beside<'m, R: Send>(
         &values,
         dims,
         opts,
-        hooks,
+        meter,
         welded,
         beside,
     )

@@ -418,8 +418,6 @@ impl Simplifier {
             attributes: None,
             meter: None,
             lifted,
-            watching: None,
-            watch_below: 0,
         }
     }
 
