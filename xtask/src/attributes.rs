@@ -33,6 +33,20 @@ struct Surface {
 }
 
 pub fn run(args: &[String]) -> Result<()> {
+    let mut rest = args.iter();
+    while let Some(a) = rest.next() {
+        match a.as_str() {
+            "--half-edge" | "--reach-off" => {}
+            "--mesh" => {
+                rest.next();
+            }
+            a if a.starts_with("--attribute-weights=") => {}
+            other => anyhow::bail!(
+                "unknown attributes option {other:?} (expected --mesh NAME, --half-edge, \
+                 --reach-off or --attribute-weights=LIST)"
+            ),
+        }
+    }
     // `--attribute-weights=LIST`: lodgen's weights (default: its defaults)
     let weights = match args
         .iter()

@@ -9,7 +9,11 @@ use std::fmt::Write as _;
 /// The levels golden files and tests use.
 pub const LEVELS: &str = "50%,10%,2%";
 
-pub fn run(_args: &[String]) -> Result<()> {
+pub fn run(args: &[String]) -> Result<()> {
+    // (it rewrites assets/golden: a mistyped option must not run it)
+    if let Some(a) = args.first() {
+        anyhow::bail!("golden takes no arguments (got {a:?})");
+    }
     let root = crate::workspace_root();
     let assets = crate::shared_assets()?;
     let golden = root.join("assets/golden");
