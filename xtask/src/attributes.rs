@@ -32,7 +32,8 @@ struct Surface {
     triangles: Vec<[u32; 3]>,
 }
 
-pub fn run(args: &[String]) -> Result<()> {
+/// An error naming the first option `run` does not know.
+fn check_options(args: &[String]) -> Result<()> {
     let mut rest = args.iter();
     while let Some(a) = rest.next() {
         match a.as_str() {
@@ -47,6 +48,11 @@ pub fn run(args: &[String]) -> Result<()> {
             ),
         }
     }
+    Ok(())
+}
+
+pub fn run(args: &[String]) -> Result<()> {
+    check_options(args)?;
     // `--attribute-weights=LIST`: lodgen's weights (default: its defaults)
     let weights = match args
         .iter()
