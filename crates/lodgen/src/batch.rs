@@ -20,18 +20,19 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use lodgen_pm::Meter;
 use serde_json::json;
-use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+mod inputs;
+
+use inputs::{clashes, file_hash, has_glob_chars, key};
+pub use inputs::{expand_inputs, input_hash, BatchInput, MESH_EXTENSIONS};
+
 use crate::manifest::Running;
 pub use crate::manifest::{Manifest, ManifestEntry, MANIFEST};
-
-/// Extensions a directory walk picks up (lower case).
-pub const MESH_EXTENSIONS: [&str; 5] = ["obj", "ply", "smf", "gltf", "glb"];
 
 /// The batch flags of `lodgen INPUT...`.
 #[derive(Args, Debug, Clone, Default)]
@@ -54,183 +55,6 @@ pub struct BatchFlags {
     /// (files whose input and options match the manifest are skipped).
     #[arg(long)]
     pub force: bool,
-}
-
-/// One input of a batch and where its output goes, relative to `--out-dir`.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub struct BatchInput {
-    pub input: PathBuf,
-    /// The output's path relative to the output directory.
-    pub relative_output: PathBuf,
-}
-
-fn is_mesh(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| MESH_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
-}
-
-fn has_glob_chars(s: &str) -> bool {
-    s.contains(['*', '?', '['])
-}
-
-fn relative_output(rel: &Path) -> PathBuf {
-    rel.with_extension("glb")
-}
-
-/// Expand the command line's inputs: files as given, directories walked
-/// (sorted, `skip` — the output directory — left out), glob patterns
-/// matched. Errors for inputs that name nothing.
-pub fn expand_inputs(inputs: &[PathBuf], skip: Option<&Path>) -> Result<Vec<BatchInput>> {
-    let skip = skip.and_then(|s| s.canonicalize().ok());
-    let mut out = Vec::new();
-    for arg in inputs {
-        let text = arg.to_string_lossy();
-        if arg.is_dir() {
-            let mut found = Vec::new();
-            let walk = walkdir::WalkDir::new(arg)
-                .follow_links(true)
-                .sort_by_file_name()
-                .into_iter()
-                .filter_entry(|e| {
-                    skip.as_ref()
-                        .is_none_or(|s| e.path().canonicalize().ok().as_ref() != Some(s))
-                });
-            for entry in walk {
-                let entry = entry.with_context(|| format!("walking {}", arg.display()))?;
-                if entry.file_type().is_file() && is_mesh(entry.path()) {
-                    let rel = entry.path().strip_prefix(arg).unwrap_or(entry.path());
-                    found.push(BatchInput {
-                        input: entry.path().to_path_buf(),
-                        relative_output: relative_output(rel),
-                    });
-                }
-            }
-            if found.is_empty() {
-                bail!(
-                    "{}: no .obj, .ply, .smf, .gltf or .glb files in this directory",
-                    arg.display()
-                );
-            }
-            out.extend(found);
-        } else if arg.is_file() {
-            let name = arg.file_name().map(PathBuf::from).unwrap_or_default();
-            out.push(BatchInput {
-                input: arg.clone(),
-                relative_output: relative_output(&name),
-            });
-        } else if has_glob_chars(&text) {
-            // The pattern's fixed prefix (the directories before the first
-            // component with a wildcard) is what outputs are relative to.
-            let base: PathBuf = arg
-                .components()
-                .take_while(|c| !has_glob_chars(&c.as_os_str().to_string_lossy()))
-                .collect();
-            let mut found = Vec::new();
-            for entry in glob::glob(&text).with_context(|| format!("glob pattern {text:?}"))? {
-                let path = entry.with_context(|| format!("glob pattern {text:?}"))?;
-                let in_skip = skip
-                    .as_ref()
-                    .is_some_and(|s| path.canonicalize().ok().is_some_and(|p| p.starts_with(s)));
-                if path.is_file() && !in_skip {
-                    let rel = path.strip_prefix(&base).unwrap_or(&path).to_path_buf();
-                    found.push(BatchInput {
-                        relative_output: relative_output(&rel),
-                        input: path,
-                    });
-                }
-            }
-            if found.is_empty() {
-                bail!("{text}: the pattern matches no file");
-            }
-            out.extend(found);
-        } else {
-            bail!("{}: no such file or directory", arg.display());
-        }
-    }
-    Ok(out)
-}
-
-fn key(rel: &Path) -> String {
-    rel.components()
-        .map(|c| c.as_os_str().to_string_lossy().into_owned())
-        .collect::<Vec<_>>()
-        .join("/")
-}
-
-/// The files an input refers to and is read with: a `.gltf`'s external
-/// buffers and images, an `.obj`'s material libraries.
-fn companions(input: &Path, bytes: &[u8]) -> Vec<PathBuf> {
-    let dir = input.parent().unwrap_or(Path::new(""));
-    let ext = input
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("gltf") => {
-            let Ok(doc) = serde_json::from_slice::<serde_json::Value>(bytes) else {
-                return Vec::new();
-            };
-            ["buffers", "images"]
-                .iter()
-                .filter_map(|k| doc[*k].as_array())
-                .flatten()
-                .filter_map(|b| b["uri"].as_str())
-                .filter(|u| !u.starts_with("data:"))
-                .map(|u| dir.join(percent_decode(u)))
-                .collect()
-        }
-        Some("obj") => String::from_utf8_lossy(bytes)
-            .lines()
-            .filter_map(|l| l.trim_start().strip_prefix("mtllib"))
-            .flat_map(|rest| {
-                rest.split_whitespace()
-                    .map(|n| dir.join(n))
-                    .collect::<Vec<_>>()
-            })
-            .collect(),
-        _ => Vec::new(),
-    }
-}
-
-fn percent_decode(s: &str) -> String {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let Ok(v) = u8::from_str_radix(&s[i + 1..i + 3], 16) {
-                out.push(v);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
-/// BLAKE3 of the input and the files it refers to (a missing companion
-/// hashes as missing, so its appearance changes the hash).
-pub fn input_hash(input: &Path) -> std::io::Result<String> {
-    let bytes = std::fs::read(input)?;
-    let mut h = blake3::Hasher::new();
-    h.update(&(bytes.len() as u64).to_le_bytes());
-    h.update(&bytes);
-    for c in companions(input, &bytes) {
-        h.update(c.to_string_lossy().as_bytes());
-        match std::fs::read(&c) {
-            Ok(b) => {
-                h.update(&(b.len() as u64).to_le_bytes());
-                h.update(&b);
-            }
-            Err(_) => {
-                h.update(b"missing");
-            }
-        }
-    }
-    Ok(h.finalize().to_hex().to_string())
 }
 
 /// BLAKE3 of every option that changes the output: all build arguments
@@ -508,25 +332,31 @@ pub fn run_batch_watched(
     args.build_options()?;
     std::fs::create_dir_all(out_dir)
         .with_context(|| format!("creating the output directory {}", out_dir.display()))?;
-    let mut seen: BTreeMap<String, &Path> = BTreeMap::new();
-    for i in inputs {
-        if let Some(first) = seen.insert(key(&i.relative_output), &i.input) {
-            bail!(
-                "{} and {} would both write {}; build them into different --out-dir",
-                first.display(),
-                i.input.display(),
-                out_dir.join(&i.relative_output).display()
-            );
-        }
-    }
+    let clashes = clashes(inputs, out_dir);
     let manifest = Manifest::load(out_dir);
     let options_hash = options_hash(args);
     let jobs = args.batch.jobs.max(1).min(inputs.len().max(1));
     let threads = threads_per_job(jobs);
-    let order = largest_first(inputs);
+    let mut order = largest_first(inputs);
+    order.retain(|&k| clashes[k].is_none());
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<FileOutcome>>> = Mutex::new(vec![None; inputs.len()]);
+    // inputs that would write one output fail, each alone
+    for (k, clash) in clashes.into_iter().enumerate() {
+        let Some(why) = clash else { continue };
+        let item = &inputs[k];
+        let outcome = FileOutcome {
+            input: item.input.clone(),
+            output: out_dir.join(&item.relative_output),
+            status: Status::Failed(why),
+            seconds: 0.0,
+            report: None,
+            entry: None,
+        };
+        on_done(done.fetch_add(1, Ordering::Relaxed) + 1, &outcome);
+        results.lock().unwrap_or_else(|p| p.into_inner())[k] = Some(outcome);
+    }
     // (on disk as files finish: an interrupted batch keeps what it built)
     let running = Running::new(out_dir, &manifest);
     let worker = || -> Result<()> {
@@ -615,7 +445,10 @@ fn one_file(
             input_hash(&item.input).with_context(|| format!("reading {}", item.input.display()))?;
         if !args.batch.force && output.is_file() {
             if let Some(e) = manifest.outputs.get(&k) {
-                if e.input_hash == hash && e.options_hash == options_hash {
+                if e.input_hash == hash
+                    && e.options_hash == options_hash
+                    && file_hash(&output).is_ok_and(|h| h == e.output_hash)
+                {
                     return Ok((Status::Skipped, e.report.clone(), None));
                 }
             }
@@ -630,6 +463,8 @@ fn one_file(
             input: item.input.display().to_string(),
             input_hash: hash,
             options_hash: options_hash.to_string(),
+            output_hash: file_hash(&output)
+                .with_context(|| format!("reading back {}", output.display()))?,
             report: report.clone(),
         };
         Ok((Status::Built, report, Some(entry)))
@@ -691,23 +526,11 @@ pub fn is_batch(args: &BuildArgs) -> bool {
 /// when any file failed; else the number of warnings.
 pub fn run(args: &BuildArgs) -> Result<usize> {
     let Some(out_dir) = &args.batch.out_dir else {
-        // a second "input" that is no file is most often an option's value
-        // cut in two by a space (`--levels 50%, 10%`)
-        let stray = args.inputs.iter().skip(1).find(|i| {
-            let text = i.to_string_lossy();
-            !i.exists() && !has_glob_chars(&text) && text.starts_with(|c: char| c.is_ascii_digit())
-        });
-        if let Some(stray) = stray {
-            bail!(
-                "{}: no such input file; a space inside an option's value? (write `--levels \
-                 50%,10%`, not `--levels 50%, 10%`)",
-                stray.display()
-            );
-        }
+        // (a stray value, `--levels 50%, 10%`, was named by `BuildArgs::check`)
         bail!("several inputs or a directory need --out-dir DIR (batch mode)");
     };
-    if args.batch.jobs == 0 {
-        bail!("--jobs must be at least 1");
+    if args.inputs.is_empty() {
+        bail!("no input mesh given (try `lodgen --help`)");
     }
     let inputs = expand_inputs(&args.inputs, Some(out_dir))?;
     let total = inputs.len();

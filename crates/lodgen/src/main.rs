@@ -106,26 +106,40 @@ fn main() -> ExitCode {
         }
         .with_context(|| format!("viewing {}", file.display()))
         .map(|()| 0),
-        None => run_build(cli.build),
+        None => {
+            // (a bad value is a bad argument, as clap's own errors are)
+            if let Err(e) = cli.build.check() {
+                print_error(&e);
+                return ExitCode::from(2);
+            }
+            run_build(cli.build)
+        }
     };
     match result {
         Ok(0) => ExitCode::SUCCESS,
         // written, with warnings
         Ok(_) => ExitCode::from(3),
         Err(e) => {
-            let parts = cli::error_parts(&e);
-            let mut parts = parts.iter();
-            eprintln!("error: {}", parts.next().map_or("", |p| p.as_str()));
-            for cause in parts {
-                eprintln!("  caused by: {cause}");
-            }
+            print_error(&e);
             ExitCode::FAILURE
         }
     }
 }
 
+/// `error: …` and its causes, one a line, on stderr.
+fn print_error(e: &anyhow::Error) {
+    let parts = cli::error_parts(e);
+    let mut parts = parts.iter();
+    eprintln!("error: {}", parts.next().map_or("", |p| p.as_str()));
+    for cause in parts {
+        eprintln!("  caused by: {cause}");
+    }
+}
+
 /// The build; returns the number of warnings.
 fn run_build(args: BuildArgs) -> Result<usize> {
+    // (before the work, which a report that cannot be written would throw away)
+    cli::check_report_path(&args)?;
     if lodgen::batch::is_batch(&args) {
         return lodgen::batch::run(&args);
     }

@@ -20,6 +20,10 @@ pub struct ManifestEntry {
     pub input: String,
     pub input_hash: String,
     pub options_hash: String,
+    /// BLAKE3 of the output as written (a damaged or replaced output is
+    /// rebuilt; empty in manifests of earlier versions: rebuilt too).
+    #[serde(default)]
+    pub output_hash: String,
     /// The file's report when it was built (shown again when skipped).
     pub report: serde_json::Value,
 }

@@ -530,25 +530,40 @@ fn hoist_stream(root: &mut Value, bin: &mut [u8], view: usize, mesh: usize) {
 }
 
 /// Add `LODGEN_progressive` to a `.glb` / `.gltf` the glTF writer has just
-/// written: each chain's stream goes on primitive 0 of its coarsest level's
-/// mesh (`{name}_LOD{levels.len() - 1}`), in the GLB binary chunk right
-/// after that mesh's data (before the finer levels'), or for `.gltf` in
-/// `STEM.stream.bin` (`STEM.streamI.bin` when several
-/// meshes carry one). Files are replaced atomically; the result is a pure
-/// function of the inputs. A chain whose coarsest mesh is not found is an
-/// error (nothing is written).
+/// written: [`embed_bytes`] on the file's bytes, then the stream files and
+/// the file replaced atomically.
 pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError> {
     let io = |source| ProgressiveError::Io {
         path: path.to_path_buf(),
         source,
     };
     let bytes = std::fs::read(path).map_err(io)?;
+    let (out, files) = embed_bytes(path, &bytes, chains)?;
+    for (p, data) in &files {
+        write_atomically(p, data)?;
+    }
+    write_atomically(path, &out)
+}
+
+/// `LODGEN_progressive` added to the bytes of a `.glb` / `.gltf` the glTF
+/// writer made for `path`: each chain's stream goes on primitive 0 of its
+/// coarsest level's mesh (`{name}_LOD{levels.len() - 1}`), in the GLB
+/// binary chunk right after that mesh's data (before the finer levels'),
+/// or for `.gltf` in `STEM.stream.bin` (`STEM.streamI.bin` when several
+/// meshes carry one). Returns the new bytes and the stream files to write
+/// beside them (none for a GLB); a pure function of the inputs. A chain
+/// whose coarsest mesh is not found is an error.
+pub fn embed_bytes(
+    path: &Path,
+    bytes: &[u8],
+    chains: &[ChainStream],
+) -> Result<crate::gltf_out::Added, ProgressiveError> {
     let glb = bytes.starts_with(b"glTF");
     let (mut root, mut bin) = if glb {
-        let (root, bin) = parse_glb(&bytes)?;
+        let (root, bin) = parse_glb(bytes)?;
         (root, bin.to_vec())
     } else {
-        (serde_json::from_slice(&bytes)?, Vec::new())
+        (serde_json::from_slice(bytes)?, Vec::new())
     };
     let mut files = Vec::new();
     for (i, c) in chains.iter().enumerate() {
@@ -589,9 +604,6 @@ pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError
             hoist_stream(&mut root, &mut bin, view, mesh);
         }
     }
-    for (p, data) in &files {
-        write_atomically(p, data)?;
-    }
     let out = if glb {
         write_glb(&root, &bin)?
     } else {
@@ -599,7 +611,7 @@ pub fn embed(path: &Path, chains: &[ChainStream]) -> Result<(), ProgressiveError
         json.push(b'\n');
         json
     };
-    write_atomically(path, &out)
+    Ok((out, files))
 }
 
 #[cfg(test)]

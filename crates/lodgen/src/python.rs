@@ -249,12 +249,16 @@ fn simplify<'py>(
         let (v, f) = arrays(py, &positions, &triangles)?;
         levels.push((v, f, report_tuple(e), *s));
     }
+    // (what the command prints under the mesh's table: why the run stopped
+    // short, and the build's notes — levels raised to the floor, levels
+    // that coincide)
     let st = &build.simplified;
-    let note = if st.stop == lodgen_pm::StopReason::Target {
-        String::new()
-    } else {
-        cli::stop_note(st.stop, &st.stats)
-    };
+    let mut notes = Vec::new();
+    if st.stop != lodgen_pm::StopReason::Target {
+        notes.push(cli::stop_note(st.stop, &st.stats));
+    }
+    notes.extend(build.notes.iter().cloned());
+    let note = notes.join("; ");
     let measured = build.measured;
     let simplified = build.simplified;
     Ok((
@@ -348,8 +352,16 @@ fn build(
     let output = output.unwrap_or_else(|| cli::default_output(&input));
     let meter = Arc::new(lodgen_pm::Meter::default());
     interruptible(py, &meter, || -> anyhow::Result<String> {
+        // (a report that cannot be written would leave the output behind)
+        cli::check_report_path(&args)?;
         if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent)?;
+            anyhow::Context::with_context(std::fs::create_dir_all(parent), || {
+                format!(
+                    "writing {}: creating {}",
+                    output.display(),
+                    parent.display()
+                )
+            })?;
         }
         let m = || Some(Arc::clone(&meter));
         let run = || cli::build_file_metered(&input, &output, &args, &mut |_| {}, m());
@@ -433,9 +445,14 @@ self_cell::self_cell!(
 
 /// A progressive mesh with a cursor (native part of
 /// `lodgen.ProgressiveMesh`).
+///
+/// Shared between Python threads: every call takes the object's lock with
+/// the GIL released (a call that waited for it holding the GIL would keep
+/// the thread inside from finishing), and works under it; so calls from
+/// several threads run one after the other, never into a borrow error.
 #[pyclass(module = "lodgen._lodgen", name = "ProgressiveMesh")]
 pub struct PyProgressiveMesh {
-    cell: PmCell,
+    cell: std::sync::Mutex<PmCell>,
     vertex_map: Vec<u32>,
     triangle_map: Vec<u32>,
 }
@@ -443,10 +460,19 @@ pub struct PyProgressiveMesh {
 impl PyProgressiveMesh {
     fn new(pm: ProgressiveMesh, vertex_map: Vec<u32>, triangle_map: Vec<u32>) -> Self {
         PyProgressiveMesh {
-            cell: PmCell::new(pm, |pm| pm.cursor()),
+            cell: std::sync::Mutex::new(PmCell::new(pm, |pm| pm.cursor())),
             vertex_map,
             triangle_map,
         }
+    }
+
+    /// `f` on the progressive mesh and its cursor, under the lock, the GIL
+    /// released.
+    fn locked<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut PmCell) -> R + Send) -> R {
+        py.detach(|| {
+            let mut cell = self.cell.lock().unwrap_or_else(|e| e.into_inner());
+            f(&mut cell)
+        })
     }
 }
 
@@ -456,72 +482,75 @@ fn u32s<'py>(py: Python<'py>, v: &[u32]) -> Bound<'py, PyArray1<u32>> {
 
 #[pymethods]
 impl PyProgressiveMesh {
-    fn __len__(&self) -> usize {
-        self.cell.borrow_owner().len()
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.locked(py, |c| c.borrow_owner().len())
     }
 
     /// Splits applied at the cursor.
     #[getter]
-    fn applied(&self) -> usize {
-        self.cell.borrow_dependent().applied()
+    fn applied(&self, py: Python<'_>) -> usize {
+        self.locked(py, |c| c.borrow_dependent().applied())
     }
 
     fn triangle_counts<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
-        let c: Vec<u64> = self
-            .cell
-            .borrow_owner()
-            .triangle_counts()
-            .into_iter()
-            .map(|n| n as u64)
-            .collect();
+        let c: Vec<u64> = self.locked(py, |c| {
+            let counts = c.borrow_owner().triangle_counts();
+            counts.into_iter().map(|n| n as u64).collect()
+        });
         PyArray1::from_vec(py, c)
     }
 
-    fn splits_for_triangles(&self, triangles: usize) -> usize {
-        self.cell.borrow_owner().splits_for_triangles(triangles)
+    fn splits_for_triangles(&self, py: Python<'_>, triangles: usize) -> usize {
+        self.locked(py, |c| c.borrow_owner().splits_for_triangles(triangles))
     }
 
     fn mesh_at_splits<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Arrays<'py>> {
-        let pm = self.cell.borrow_owner();
-        let m: Mesh = py.detach(|| pm.mesh_at_splits(k));
+        let m: Mesh = self.locked(py, |c| c.borrow_owner().mesh_at_splits(k));
         arrays(py, &m.positions, &m.triangles)
     }
 
     fn full_in_input_order<'py>(&self, py: Python<'py>) -> PyResult<Arrays<'py>> {
-        let pm = self.cell.borrow_owner();
-        let m: Mesh = py.detach(|| pm.full_in_input_order());
+        let m: Mesh = self.locked(py, |c| c.borrow_owner().full_in_input_order());
         arrays(py, &m.positions, &m.triangles)
     }
 
     fn mesh<'py>(&self, py: Python<'py>) -> PyResult<Arrays<'py>> {
-        let m = self.cell.borrow_dependent().mesh();
-        arrays(py, &m.positions, &m.triangles)
+        let (p, t) = self.locked(py, |c| {
+            let m = c.borrow_dependent().mesh();
+            (m.positions.clone(), m.triangles.clone())
+        });
+        arrays(py, &p, &t)
     }
 
-    fn refine(&mut self, py: Python<'_>, n: usize) -> usize {
-        let cell = &mut self.cell;
-        py.detach(|| cell.with_dependent_mut(|_, c| c.refine(n)))
+    fn refine(&self, py: Python<'_>, n: usize) -> usize {
+        self.locked(py, |cell| cell.with_dependent_mut(|_, c| c.refine(n)))
     }
 
-    fn coarsen(&mut self, py: Python<'_>, n: usize) -> usize {
-        let cell = &mut self.cell;
-        py.detach(|| cell.with_dependent_mut(|_, c| c.coarsen(n)))
+    fn coarsen(&self, py: Python<'_>, n: usize) -> usize {
+        self.locked(py, |cell| cell.with_dependent_mut(|_, c| c.coarsen(n)))
     }
 
-    fn seek(&mut self, py: Python<'_>, k: usize) {
-        let cell = &mut self.cell;
-        let len = cell.borrow_owner().len();
-        py.detach(|| cell.with_dependent_mut(|_, c| c.seek(k.min(len))))
+    fn seek(&self, py: Python<'_>, k: usize) {
+        self.locked(py, |cell| {
+            let len = cell.borrow_owner().len();
+            cell.with_dependent_mut(|_, c| c.seek(k.min(len)))
+        })
     }
 
     #[getter]
     fn vertex_origin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        u32s(py, &self.cell.borrow_owner().vertex_origin)
+        PyArray1::from_vec(
+            py,
+            self.locked(py, |c| c.borrow_owner().vertex_origin.clone()),
+        )
     }
 
     #[getter]
     fn triangle_origin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        u32s(py, &self.cell.borrow_owner().triangle_origin)
+        PyArray1::from_vec(
+            py,
+            self.locked(py, |c| c.borrow_owner().triangle_origin.clone()),
+        )
     }
 
     #[getter]
@@ -535,8 +564,9 @@ impl PyProgressiveMesh {
     }
 
     /// The splits as columns: v1, v0 (u32), p1, p_merged, p0 (n×3 f32 flat),
-    /// faces (n×2×3 u32 flat, unused rows u32::MAX), n_faces (u8),
-    /// n_corners (u32), error (f32).
+    /// every split's restored faces one after the other (F×3 u32 flat), its
+    /// moved corners likewise (C×2 u32 flat: triangle, slot), n_faces and
+    /// n_corners per split (u32), error (f32).
     #[allow(clippy::type_complexity)]
     fn split_columns<'py>(
         &self,
@@ -548,11 +578,43 @@ impl PyProgressiveMesh {
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<u32>>,
-        Bound<'py, PyArray1<u8>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
         Bound<'py, PyArray1<u32>>,
         Bound<'py, PyArray1<f32>>,
     ) {
-        let s = &self.cell.borrow_owner().splits;
+        let c = self.locked(py, |c| SplitColumns::of(&c.borrow_owner().splits));
+        (
+            PyArray1::from_vec(py, c.v1),
+            PyArray1::from_vec(py, c.v0),
+            PyArray1::from_vec(py, c.p1),
+            PyArray1::from_vec(py, c.pm),
+            PyArray1::from_vec(py, c.p0),
+            PyArray1::from_vec(py, c.faces),
+            PyArray1::from_vec(py, c.corners),
+            PyArray1::from_vec(py, c.nf),
+            PyArray1::from_vec(py, c.nc),
+            PyArray1::from_vec(py, c.err),
+        )
+    }
+}
+
+/// The splits as columns ([`PyProgressiveMesh::split_columns`]).
+struct SplitColumns {
+    v1: Vec<u32>,
+    v0: Vec<u32>,
+    p1: Vec<f32>,
+    pm: Vec<f32>,
+    p0: Vec<f32>,
+    faces: Vec<u32>,
+    corners: Vec<u32>,
+    nf: Vec<u32>,
+    nc: Vec<u32>,
+    err: Vec<f32>,
+}
+
+impl SplitColumns {
+    fn of(s: &[lodgen_pm::VertexSplit]) -> SplitColumns {
         let n = s.len();
         let (mut v1, mut v0) = (Vec::with_capacity(n), Vec::with_capacity(n));
         let (mut p1, mut pm, mut p0) = (
@@ -560,7 +622,9 @@ impl PyProgressiveMesh {
             Vec::with_capacity(3 * n),
             Vec::with_capacity(3 * n),
         );
-        let mut faces = Vec::with_capacity(6 * n);
+        // every split's restored faces and moved corners, one after the
+        // other (most splits restore two faces and move a few corners)
+        let (mut faces, mut corners) = (Vec::with_capacity(6 * n), Vec::with_capacity(8 * n));
         let (mut nf, mut nc, mut err) = (
             Vec::with_capacity(n),
             Vec::with_capacity(n),
@@ -572,24 +636,28 @@ impl PyProgressiveMesh {
             p1.extend_from_slice(&x.p1);
             pm.extend_from_slice(&x.p_merged);
             p0.extend_from_slice(&x.p0);
-            for k in 0..2 {
-                faces.extend_from_slice(&x.faces.get(k).copied().unwrap_or([u32::MAX; 3]));
+            for f in &x.faces {
+                faces.extend_from_slice(f);
             }
-            nf.push(x.faces.len() as u8);
+            for c in &x.corners {
+                corners.extend_from_slice(&[c.triangle, u32::from(c.slot)]);
+            }
+            nf.push(x.faces.len() as u32);
             nc.push(x.corners.len() as u32);
             err.push(x.error);
         }
-        (
-            PyArray1::from_vec(py, v1),
-            PyArray1::from_vec(py, v0),
-            PyArray1::from_vec(py, p1),
-            PyArray1::from_vec(py, pm),
-            PyArray1::from_vec(py, p0),
-            PyArray1::from_vec(py, faces),
-            PyArray1::from_vec(py, nf),
-            PyArray1::from_vec(py, nc),
-            PyArray1::from_vec(py, err),
-        )
+        SplitColumns {
+            v1,
+            v0,
+            p1,
+            pm,
+            p0,
+            faces,
+            corners,
+            nf,
+            nc,
+            err,
+        }
     }
 }
 

@@ -290,6 +290,75 @@ fn a_rerun_skips_everything_and_force_rebuilds() {
         (Some(1), Some(2))
     );
     assert!(root.join("out/parts/sphere.glb").exists());
+
+    // So is a damaged one (its bytes are not the ones the manifest recorded).
+    let good = std::fs::read(root.join("out/torus.glb")).unwrap();
+    std::fs::write(root.join("out/torus.glb"), b"garbage").unwrap();
+    let args = [
+        "in",
+        "--out-dir",
+        "out",
+        "--levels",
+        "30%",
+        "--report",
+        "r7.json",
+    ];
+    assert!(lodgen(&args, root).status.success());
+    let r7 = read_report(&root.join("r7.json"));
+    assert_eq!(
+        (r7["built"].as_u64(), r7["skipped"].as_u64()),
+        (Some(1), Some(2))
+    );
+    assert_eq!(std::fs::read(root.join("out/torus.glb")).unwrap(), good);
+}
+
+/// What a walk or a command line can name more than once or not at all: a
+/// file reached twice (a directory and a glob over it) is built once; a
+/// link to nothing fails alone and a link back up the tree is not followed
+/// round, the others are built; no input at all is an error, not an empty
+/// batch. (Fails when one of them stops the batch, or builds a file twice.)
+#[test]
+fn links_repeats_and_no_inputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    mixed_inputs(root);
+    std::fs::remove_file(root.join("in/parts/broken.obj")).unwrap();
+    let o = lodgen(
+        &[
+            "in",
+            "in/parts/*.ply",
+            "--out-dir",
+            "o1",
+            "--report",
+            "r1.json",
+        ],
+        root,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r1 = read_report(&root.join("r1.json"));
+    assert_eq!(r1["files"].as_array().map(Vec::len), Some(3), "{r1}");
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("/nonexistent/mesh.obj", root.join("in/dangling.obj")).unwrap();
+        std::os::unix::fs::symlink("..", root.join("in/parts/up")).unwrap();
+        let o = lodgen(&["in", "--out-dir", "o2", "--report", "r2.json"], root);
+        assert_eq!(o.status.code(), Some(1));
+        let r2 = read_report(&root.join("r2.json"));
+        let s = statuses(&r2);
+        assert_eq!(s.len(), 4, "{s:?}");
+        assert!(
+            s.contains(&("in/dangling.obj".into(), "failed".into())),
+            "{s:?}"
+        );
+        assert_eq!(
+            outputs(&root.join("o2")),
+            ["parts/deep/small.glb", "parts/sphere.glb", "torus.glb"]
+        );
+    }
+    let o = lodgen(&["--out-dir", "o3"], root);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no input mesh given"));
+    assert!(!root.join("o3").exists());
 }
 
 #[test]
@@ -311,7 +380,8 @@ fn globs_and_files_keep_their_relative_paths() {
     assert!(!o.status.success());
     assert_eq!(outputs(&root.join("out")), ["deep/small.glb", "sphere.glb"]);
 
-    // Two inputs writing the same output are refused before anything runs.
+    // Two inputs writing the same output fail, each alone; the others are
+    // built.
     let clash = lodgen(
         &[
             "in/torus.obj",
@@ -329,12 +399,19 @@ fn globs_and_files_keep_their_relative_paths() {
     )
     .unwrap();
     let clash = lodgen(
-        &["in/torus.obj", "in/parts/torus.ply", "--out-dir", "o3"],
+        &[
+            "in/torus.obj",
+            "in/parts/torus.ply",
+            "in/parts/sphere.ply",
+            "--out-dir",
+            "o3",
+        ],
         root,
     );
     assert!(!clash.status.success());
     assert!(String::from_utf8_lossy(&clash.stderr).contains("would both write"));
-    assert!(!root.join("o3/torus.glb").exists());
+    assert!(String::from_utf8_lossy(&clash.stderr).contains("2 of 3 files failed"));
+    assert_eq!(outputs(&root.join("o3")), ["sphere.glb"]);
 
     let none = lodgen(&["in/*.stl", "--out-dir", "o4"], root);
     assert!(!none.status.success());

@@ -308,7 +308,7 @@ fn a_level_cut_off_by_a_space_is_named() {
     let input = d.join("torus.obj");
     write_torus_obj(&input);
     let o = lodgen(&[input.to_str().unwrap(), "--levels", "50%,", "10%"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a bad argument");
     let err = stderr(&o);
     assert!(
         err.contains("10%: no such input file; a space inside an option's value?"),
@@ -1056,4 +1056,38 @@ fn fix_worst_lowers_the_worst_spot_and_needs_the_measurement() {
         assert!(!out.exists(), "{bad:?} wrote {}", out.display());
     }
     std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A flag's bad value is a bad argument (exit 2, as clap's own errors), and
+/// a `--report` that cannot be written is refused before the work: nothing
+/// written, not an output and then an error. (Fails when the value errors
+/// exit 1, or the output is left behind.)
+#[test]
+fn bad_values_exit_2_and_a_bad_report_path_writes_nothing() {
+    let d = tmp("bad-values");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let out = d.join("t.glb");
+    let i = input.to_str().unwrap();
+    let o_arg = out.to_str().unwrap();
+    for bad in [
+        &["--levels", "abc"][..],
+        &["--max-error", "x"],
+        &["--tau", "-1"],
+        &["--samples", "0"],
+        &["--jobs", "0"],
+    ] {
+        let mut args = vec![i, "-o", o_arg];
+        args.extend_from_slice(bad);
+        let o = lodgen(&args);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", stderr(&o));
+        assert!(stderr(&o).starts_with("error: "), "{bad:?}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+    let report = d.join("missing-dir/r.json");
+    let o = lodgen(&[i, "-o", o_arg, "--report", report.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("does not exist"), "{}", stderr(&o));
+    assert!(!out.exists(), "the output was written");
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -83,7 +83,7 @@ fn spot_splits_corners_at_uv_seams() {
 }
 
 #[test]
-fn beetle_has_normals_and_a_missing_mtllib_does_not_fail() {
+fn beetle_has_normals_and_a_missing_mtllib_is_a_warning() {
     let Some(s) = read("beetle.obj") else { return };
     let (vertices, triangles) = counts(&s);
     assert_eq!(triangles, 2_053);
@@ -98,6 +98,9 @@ fn beetle_has_normals_and_a_missing_mtllib_does_not_fail() {
         assert_eq!(n.len(), p.positions.len());
     }
     assert!(s.materials.iter().all(|m| m.base_color.is_none()));
+    let w: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].starts_with("mtllib VWBugMesh002.mtl:"), "{w:?}");
 }
 
 #[test]

@@ -194,6 +194,53 @@ fn mtllib_is_read_from_beside_the_obj() {
     assert_eq!(s.materials[0].base_color, Some([1.0, 0.0, 0.0, 1.0]));
 }
 
+/// What an OBJ's materials lose is said: a missing library and each texture
+/// map of a used material are warnings naming them (an unused material's
+/// maps are not), and with `--strict` an error. (Fails when they are dropped
+/// silently.)
+#[test]
+fn missing_libraries_and_texture_maps_are_warnings() {
+    let text = "mtllib a.mtl gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl skin\nf 1 2 3\n";
+    let mtl = b"newmtl skin\nKd 1 1 1\nmap_Kd skin diffuse.png\nnewmtl unused\nmap_Kd u.png\n";
+    let s = read_obj_with_materials(text.as_bytes(), Path::new("m.obj"), |name| {
+        (name == "a.mtl").then(|| mtl.to_vec())
+    })
+    .unwrap();
+    let w: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(
+        w[0].starts_with("mtllib gone.mtl: material library not found"),
+        "{w:?}"
+    );
+    assert!(
+        w[1].starts_with("material `skin`: map_Kd diffuse.png:"),
+        "{w:?}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.obj");
+    std::fs::write(&path, text).unwrap();
+    std::fs::write(dir.path().join("a.mtl"), mtl).unwrap();
+    let strict = lodgen::io::ReadOptions { strict: true };
+    let e = lodgen::io::read_scene_with(&path, &strict).unwrap_err();
+    assert!(
+        e.to_string().contains("gone.mtl") && e.to_string().contains("--strict"),
+        "{e}"
+    );
+    assert_eq!(lodgen::io::read_scene(&path).unwrap().warnings.len(), 2);
+}
+
+/// A file saved with a UTF-8 byte order mark (Windows tools) reads as
+/// without it. (Fails when the mark hides the first line's statement.)
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bom.obj");
+    std::fs::write(&path, "\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let s = lodgen::io::read_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(only_prim(&s).positions[0], [0.0, 0.0, 0.0]);
+    assert_eq!(only_prim(&s).indices, vec![0, 1, 2]);
+}
+
 #[test]
 fn crlf_comments_and_extra_components() {
     let s = obj(

@@ -147,3 +147,56 @@ fn prepared_levels_write_the_same_bytes() {
         assert!(fa == fc, "{name} {opts:?}: a stale level");
     }
 }
+
+/// What a caller adds before the write (`write_lods_added`, how `lodgen
+/// --progressive` adds its stream) is in the file and its side files are
+/// written beside it; when the addition fails, an existing output and the
+/// directory stay exactly as they were (no file written, no temporary file
+/// left). (Fails when the output is written before the addition, as the
+/// stream once was added to a file already in place.)
+#[test]
+fn an_addition_is_written_with_the_file_or_nothing_is() {
+    let (positions, indices) = icosphere(3, 1.0, [0.0; 3]);
+    let prim = Primitive {
+        material: Some(0),
+        positions,
+        indices,
+        ..Primitive::default()
+    };
+    let scene = one_mesh_scene("ball", prim.clone(), "red", [1.0, 0.0, 0.0, 1.0]);
+    let lod = chain("ball", 0, prim, &[0.5]);
+    let chains = std::slice::from_ref(&lod);
+    let opts = WriteOptions::default();
+    for name in ["a.glb", "a.gltf"] {
+        let dir = scratch("added");
+        let out = dir.join(name);
+        let plain = std::cell::Cell::new(0);
+        let add = |path: &std::path::Path, mut bytes: Vec<u8>| {
+            plain.set(bytes.len());
+            bytes.extend_from_slice(b"    ");
+            let side = path.with_file_name("a.extra.bin");
+            Ok((bytes, vec![(side, b"extra".to_vec())]))
+        };
+        lodgen::gltf_out::write_lods_added(&out, &scene, chains, &opts, false, None, Some(&add))
+            .unwrap();
+        let written = std::fs::read(&out).unwrap();
+        assert!(written.ends_with(b"    ") && written.len() == plain.get() + 4);
+        assert_eq!(std::fs::read(dir.join("a.extra.bin")).unwrap(), b"extra");
+        // an existing output, then a failing addition
+        std::fs::write(&out, b"old output").unwrap();
+        let before = all_files(&dir);
+        let fail = |_: &std::path::Path, _: Vec<u8>| Err("no room for the stream".to_string());
+        let err = lodgen::gltf_out::write_lods_added(
+            &out,
+            &scene,
+            chains,
+            &opts,
+            false,
+            None,
+            Some(&fail),
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("no room for the stream"), "{err}");
+        assert!(all_files(&dir) == before, "{name}: the directory changed");
+    }
+}

@@ -48,9 +48,13 @@ __all__ = [
 __version__: str = _lodgen.__version__
 
 #: The dtype of :attr:`ProgressiveMesh.splits`: one record per vertex split,
-#: coarse to fine. ``faces`` holds the ``n_faces`` (0-2) restored triangles,
-#: unused rows are 2**32 - 1; ``n_corners`` is how many corners go from
-#: ``v1`` back to ``v0``; ``error`` the contraction's quadric error.
+#: coarse to fine. Split ``k`` restores vertex ``v0`` at ``p0`` and moves
+#: ``v1`` from ``p_merged`` back to ``p1``; it restores the ``n_faces``
+#: triangles ``ProgressiveMesh.split_faces[first_face:first_face + n_faces]``
+#: (numbered on from the mesh's current triangles, in that order) and moves
+#: the ``n_corners`` corners ``ProgressiveMesh.split_corners[first_corner:
+#: first_corner + n_corners]`` (triangle, slot) from ``v1`` back to ``v0``;
+#: ``error`` is the contraction's quadric error.
 SPLIT_DTYPE = np.dtype(
     [
         ("v1", "<u4"),
@@ -58,17 +62,48 @@ SPLIT_DTYPE = np.dtype(
         ("p1", "<f4", (3,)),
         ("p_merged", "<f4", (3,)),
         ("p0", "<f4", (3,)),
-        ("n_faces", "u1"),
-        ("faces", "<u4", (2, 3)),
+        ("n_faces", "<u4"),
+        ("first_face", "<u8"),
         ("n_corners", "<u4"),
+        ("first_corner", "<u8"),
         ("error", "<f4"),
     ]
 )
 
 MeshLike = Any  # a trimesh.Trimesh, or anything with .vertices and .faces
 
+_DEFAULT_LEVELS = (0.5, 0.1, 0.02)
+
+#: The most threads ``build(threads=...)`` starts (more is a typo, not a
+#: machine: each is an OS thread).
+_MAX_THREADS = 1024
+
+
+#: Options of the command that mean nothing for a call returning arrays
+#: (:func:`simplify`, :class:`ProgressiveMesh`): refused there, not ignored.
+_FILE_OPTIONS = (
+    "report",
+    "quantize",
+    "compress",
+    "progressive",
+    "jobs",
+    "force",
+    "strict",
+    "quiet",
+    "verbose",
+)
+
 
 def _flag_value(key: str, value: Any) -> str:
+    if key in ("levels", "max_error") and isinstance(value, (bytes, bytearray)):
+        raise LodgenError(f"{key}: a list of levels or a string, not bytes {value!r}")
+    if key in ("levels", "max_error") and not isinstance(value, str):
+        try:
+            value = list(value)
+        except TypeError:
+            raise LodgenError(
+                f"{key}= takes a list (levels=[0.5, 0.1]) or a string, not {value!r}"
+            ) from None
     if key == "levels" and not isinstance(value, str):
         items = []
         for v in value:
@@ -82,19 +117,31 @@ def _flag_value(key: str, value: Any) -> str:
                 items.append(repr(float(v)))
         return ",".join(items)
     if key == "max_error" and not isinstance(value, str):
+        if any(isinstance(v, (bool, np.bool_)) for v in value):
+            raise LodgenError(f"--max-error: {value!r}: bounds are numbers, not booleans")
         return ",".join(v if isinstance(v, str) else f"{float(v)!r}%" for v in value)
     if key == "attribute_weights" and isinstance(value, dict):
         return ",".join(f"{k}={float(v)!r}" for k, v in value.items())
     return str(value)
 
 
-def _argv(options: dict) -> List[str]:
-    """The command line's flags for keyword options."""
+def _argv(options: dict, arrays: bool = False) -> List[str]:
+    """The command line's flags for keyword options (``arrays``: for a call
+    that returns arrays, where the file options are refused)."""
     argv: List[str] = []
+    if "levels" in options and "max_error" in options:
+        raise LodgenError("levels= and max_error= cannot be used together")
     for key, value in options.items():
         if key in ("input", "inputs", "output", "out_dir"):
             raise LodgenError(f"{key}= is not an option here; pass paths as arguments")
-        if key == "measure" and isinstance(value, (bool, np.bool_)):
+        if arrays and key in _FILE_OPTIONS:
+            raise LodgenError(
+                f"{key}= is an option of the files the command writes; "
+                "lodgen.build(path_in, path_out, ...) takes it"
+            )
+        if isinstance(value, np.bool_):
+            value = bool(value)
+        if key == "measure" and isinstance(value, bool):
             value = "on" if value else "off"
         if key == "reach" and (value is None or value is False):
             value = "off"  # (on by default: reach=False turns it off)
@@ -251,7 +298,13 @@ class ProgressiveMesh:
                         f"target_triangles must be a triangle count, not {target_triangles!r}"
                     )
                 target_triangles = t
-            _native = _lodgen.progressive(v, f, _argv(options), target_triangles)
+            for key in ("levels", "max_error", "measure", "polish", "fix_worst"):
+                if key in options:
+                    raise LodgenError(
+                        f"{key}= chooses or measures levels; a ProgressiveMesh keeps every "
+                        "split (lodgen.simplify takes it)"
+                    )
+            _native = _lodgen.progressive(v, f, _argv(options, arrays=True), target_triangles)
         self._pm = _native
 
     def __len__(self) -> int:
@@ -307,16 +360,34 @@ class ProgressiveMesh:
     @property
     def splits(self) -> np.ndarray:
         """Every vertex split, coarse to fine, as a structured array of
-        :data:`SPLIT_DTYPE`."""
-        v1, v0, p1, pm, p0, faces, nf, nc, err = self._pm.split_columns()
+        :data:`SPLIT_DTYPE`; with :attr:`split_faces` and
+        :attr:`split_corners` they replay the base mesh to the full one."""
+        return self._split_arrays()[0]
+
+    @property
+    def split_faces(self) -> np.ndarray:
+        """The triangles every split restores, split after split: an
+        ``(F, 3)`` uint32 array (``splits["first_face"]`` indexes it)."""
+        return self._split_arrays()[1]
+
+    @property
+    def split_corners(self) -> np.ndarray:
+        """The corners every split moves from ``v1`` back to ``v0``, split
+        after split: a ``(C, 2)`` uint32 array of (triangle, slot)
+        (``splits["first_corner"]`` indexes it)."""
+        return self._split_arrays()[2]
+
+    def _split_arrays(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        v1, v0, p1, pm, p0, faces, corners, nf, nc, err = self._pm.split_columns()
         out = np.zeros(len(v1), dtype=SPLIT_DTYPE)
         out["v1"], out["v0"] = v1, v0
         out["p1"] = p1.reshape(-1, 3)
         out["p_merged"] = pm.reshape(-1, 3)
         out["p0"] = p0.reshape(-1, 3)
-        out["faces"] = faces.reshape(-1, 2, 3)
         out["n_faces"], out["n_corners"], out["error"] = nf, nc, err
-        return out
+        out["first_face"] = np.cumsum(nf, dtype=np.uint64) - nf
+        out["first_corner"] = np.cumsum(nc, dtype=np.uint64) - nc
+        return out, faces.reshape(-1, 3), corners.reshape(-1, 2)
 
     def full_in_input_order(self) -> Tuple[np.ndarray, np.ndarray]:
         """The fully refined mesh in the welded input's own numbering:
@@ -362,7 +433,7 @@ class SimplifyResult:
 def simplify(
     vertices: Any,
     faces: Any = None,
-    levels: Union[Sequence[Union[float, int, str]], str] = (0.5, 0.1, 0.02),
+    levels: Union[Sequence[Union[float, int, str]], str] = _DEFAULT_LEVELS,
     **options: Any,
 ) -> SimplifyResult:
     """Build levels of detail of one mesh in one simplification pass and
@@ -398,8 +469,11 @@ def simplify(
     v, f, dtype = _mesh_arrays(vertices, faces)
     if "max_error" not in options:
         options = {"levels": levels, **options}
-    out, pm, note, measured = _lodgen.simplify(v, f, _argv(options))
-    as_dtype = np.float64 if dtype == np.float64 else np.float32
+    elif levels is not _DEFAULT_LEVELS:
+        raise LodgenError("levels= and max_error= cannot be used together")
+    out, pm, note, measured = _lodgen.simplify(v, f, _argv(options, arrays=True))
+    # (float64 in any byte order, or wider: float64; else float32)
+    as_dtype = np.float64 if dtype.kind == "f" and dtype.itemsize >= 8 else np.float32
     result = [
         Level(lv.astype(as_dtype, copy=False), lf.astype(np.int64), s, Errors._from(e))
         for lv, lf, e, s in out
@@ -428,6 +502,12 @@ def build(
     bytes as the command), without printing. Returns the file's report (the
     command's ``--report`` JSON) as a dict. ``threads`` limits the file's
     own threads (default: every core). ``report="x.json"`` also writes it."""
+    if threads is not None:
+        if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)):
+            raise LodgenError(f"threads= must be a whole number of threads, not {threads!r}")
+        if not 1 <= int(threads) <= _MAX_THREADS:
+            raise LodgenError(f"threads= must be 1 to {_MAX_THREADS}, not {threads}")
+        threads = int(threads)
     text = _lodgen.build(
         os.fspath(path_in),
         None if path_out is None else os.fspath(path_out),

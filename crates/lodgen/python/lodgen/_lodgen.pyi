@@ -48,7 +48,8 @@ class ProgressiveMesh:
         npt.NDArray[np.float32],
         npt.NDArray[np.float32],
         npt.NDArray[np.uint32],
-        npt.NDArray[np.uint8],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
         npt.NDArray[np.uint32],
         npt.NDArray[np.float32],
     ]: ...

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import lodgen
-from conftest import torus, write_obj
+from conftest import shared_asset, torus, write_obj
 
 
 def triangle_set(vertices, faces):
@@ -89,25 +89,49 @@ def test_progressive_mesh_replays_to_the_input_exactly():
         assert len(mf) <= max(t, len(base_f))
 
 
+def replay(pm):
+    """The full mesh rebuilt from the base mesh with the split arrays alone."""
+    s, faces, corners = pm.splits, pm.split_faces, pm.split_corners
+    pos, tris = (np.array(a) for a in pm.mesh_at_splits(0))
+    pos, tris = [tuple(p) for p in pos], [list(t) for t in tris]
+    for x in s:
+        assert x["v0"] == len(pos)
+        pos[x["v1"]] = tuple(x["p1"])
+        pos.append(tuple(x["p0"]))
+        a, b = int(x["first_corner"]), int(x["first_corner"] + x["n_corners"])
+        for t, slot in corners[a:b]:
+            assert tris[t][slot] == x["v1"]
+            tris[t][slot] = x["v0"]
+        a, b = int(x["first_face"]), int(x["first_face"] + x["n_faces"])
+        tris.extend(list(t) for t in faces[a:b])
+    return np.array(pos, dtype=np.float32), np.array(tris, dtype=np.int64)
+
+
 def test_splits_structured_array_rebuilds_every_mesh():
     v, f = torus(n=16, m=8)
     pm = lodgen.ProgressiveMesh(v, f)
     s = pm.splits
     assert s.dtype == lodgen.SPLIT_DTYPE and len(s) == len(pm)
-    # Replay the splits in NumPy (vertex positions and restored faces;
-    # corner moves are not in the array, so compare positions and counts).
-    pos, tris = (np.array(a) for a in pm.mesh_at_splits(0))
-    pos = list(map(tuple, pos))
-    ntri = int(len(tris))
-    for k, x in enumerate(s):
-        assert x["v0"] == len(pos)
-        pos[x["v1"]] = tuple(x["p1"])
-        pos.append(tuple(x["p0"]))
-        ntri += int(x["n_faces"])
+    rv, rf = replay(pm)
     fv, ff = pm.mesh_at_splits(len(pm))
-    np.testing.assert_array_equal(np.array(pos, dtype=np.float32), fv)
-    assert ntri == len(ff) == len(f)
+    np.testing.assert_array_equal(rv, fv)
+    np.testing.assert_array_equal(rf, ff)
+    assert len(ff) == len(f)
     np.testing.assert_array_equal(pm.triangle_counts, np.cumsum([len(pm.mesh_at_splits(0)[1])] + list(s["n_faces"])))
+
+
+def test_splits_of_more_than_two_faces_are_whole():
+    # the cow has edges of three and four faces (sheets meeting at an edge):
+    # each such split restores all of them (the array once kept two)
+    v, f = lodgen.read(shared_asset("cow.obj"))
+    pm = lodgen.ProgressiveMesh(v, f)
+    s = pm.splits
+    assert s["n_faces"].max() > 2
+    assert len(pm.split_faces) == s["n_faces"].sum()
+    rv, rf = replay(pm)
+    fv, ff = pm.mesh_at_splits(len(pm))
+    np.testing.assert_array_equal(rv, fv)
+    np.testing.assert_array_equal(rf, ff)
 
 
 def test_trimesh_input_and_measure():
@@ -383,3 +407,59 @@ def test_topology_change_reaches_a_count_the_topology_stops():
         assert changed.note == "", kw
         v_l, f_l = changed.progressive.mesh_at_splits(changed.levels[0].splits)
         assert len(f_l) == 16, kw
+
+
+def test_options_are_taken_as_given_or_refused():
+    v, f = torus(n=24, m=12)
+    # NumPy booleans are booleans
+    a = lodgen.simplify(v, f, levels=[0.1], reach=np.False_, measure=False)
+    b = lodgen.simplify(v, f, levels=[0.1], reach=False, measure=False)
+    np.testing.assert_array_equal(a.levels[0].faces, b.levels[0].faces)
+    lodgen.simplify(v, f, levels=[0.1], polish=np.True_, measure=False)
+    # what only the written files use is refused, not ignored
+    for key, value in [("report", "x.json"), ("quantize", True), ("compress", "meshopt")]:
+        with pytest.raises(lodgen.LodgenError, match=f"{key}= is an option of the files"):
+            lodgen.simplify(v, f, **{key: value})
+    with pytest.raises(lodgen.LodgenError, match="keeps every split"):
+        lodgen.ProgressiveMesh(v, f, levels=[0.5])
+    with pytest.raises(lodgen.LodgenError, match="cannot be used together"):
+        lodgen.simplify(v, f, levels=[0.5], max_error=[0.5])
+    with pytest.raises(lodgen.LodgenError, match="takes a list"):
+        lodgen.simplify(v, f, levels=0.5)
+    with pytest.raises(lodgen.LodgenError, match="threads= must be 1 to"):
+        lodgen.build("in.obj", "out.glb", threads=5000)
+    with pytest.raises(lodgen.LodgenError, match="threads= must be a whole number"):
+        lodgen.build("in.obj", "out.glb", threads="2")
+
+
+def test_the_note_says_why_levels_coincide():
+    v, f = torus(n=6, m=4)  # 48 triangles
+    r = lodgen.simplify(v, f, levels=[4, 2], measure=False)
+    assert len(r.levels) == 1
+    assert "fewer than 8 triangles" in r.note, r.note
+
+
+def test_a_progressive_mesh_shared_by_threads():
+    v, f = torus(n=48, m=24)
+    pm = lodgen.ProgressiveMesh(v, f)
+    errors = []
+
+    def walk():
+        try:
+            for _ in range(30):
+                pm.seek(len(pm))
+                pm.seek(0)
+        except Exception as e:  # noqa: BLE001 (any error fails the test)
+            errors.append(e)
+
+    t = threading.Thread(target=walk)
+    t.start()
+    while t.is_alive():
+        try:
+            pm.applied
+            pm.mesh_at_splits(len(pm) // 2)
+        except Exception as e:  # noqa: BLE001
+            errors.append(e)
+            break
+    t.join()
+    assert not errors, errors

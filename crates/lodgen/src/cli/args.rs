@@ -450,6 +450,34 @@ pub fn parse_tau(s: &str) -> Result<Tau> {
 }
 
 impl BuildArgs {
+    /// Every value checked before any work: the options ([`Self::build_options`])
+    /// and the batch flags. An error here is a bad argument (exit code 2).
+    pub fn check(&self) -> Result<()> {
+        // a second "input" that is no file is most often an option's value
+        // cut in two by a space (`--levels 50%, 10%`): named first, as the
+        // option's own value (`50%,`) is then wrong too
+        if self.batch.out_dir.is_none() {
+            let stray = self.inputs.iter().skip(1).find(|i| {
+                let text = i.to_string_lossy();
+                !i.exists()
+                    && !text.contains(['*', '?', '['])
+                    && text.starts_with(|c: char| c.is_ascii_digit())
+            });
+            if let Some(stray) = stray {
+                bail!(
+                    "{}: no such input file; a space inside an option's value? (write `--levels \
+                     50%,10%`, not `--levels 50%, 10%`)",
+                    stray.display()
+                );
+            }
+        }
+        self.build_options()?;
+        if self.batch.jobs == 0 {
+            bail!("--jobs must be at least 1");
+        }
+        Ok(())
+    }
+
     /// The library options these arguments mean.
     pub fn build_options(&self) -> Result<BuildOptions> {
         let levels = match &self.max_error {

@@ -119,20 +119,33 @@ pub fn build_file_metered(
     on_progress(Progress::Writing);
     let t_write = Instant::now();
     let wopts = args.write_options();
-    let summary =
-        gltf_out::write_lods_prepared(output, &scene, &lods, &wopts, args.strict, Some(&ready))
-            .with_context(|| format!("writing {}", output.display()))?;
-    warnings.extend(summary.warnings.iter().cloned());
-    // --- LODGEN_progressive (issue 6): append each mesh's split stream ---
-    if args.progressive {
-        let chains = builds
+    // --- LODGEN_progressive (issue 6): each mesh's split stream, added to
+    // the file before it is written (a failure leaves the output as it was)
+    let chains = if args.progressive {
+        builds
             .iter()
             .map(|b| crate::progressive::ChainStream::from_build(b, &scene.meshes[b.lod.source]))
             .collect::<Result<Vec<_>, _>>()
-            .context("encoding the vertex-split stream")?;
-        crate::progressive::embed(output, &chains)
-            .with_context(|| format!("adding LODGEN_progressive to {}", output.display()))?;
-    }
+            .context("encoding the vertex-split stream")?
+    } else {
+        Vec::new()
+    };
+    let embed = |path: &Path, bytes: Vec<u8>| {
+        crate::progressive::embed_bytes(path, &bytes, &chains)
+            .map_err(|e| format!("adding LODGEN_progressive: {}", error_chain(&e)))
+    };
+    let add: Option<gltf_out::Addition<'_>> = args.progressive.then_some(&embed as _);
+    let summary = gltf_out::write_lods_added(
+        output,
+        &scene,
+        &lods,
+        &wopts,
+        args.strict,
+        Some(&ready),
+        add,
+    )
+    .with_context(|| format!("writing {}", output.display()))?;
+    warnings.extend(summary.warnings.iter().cloned());
     // --- end LODGEN_progressive ---
     let write = t_write.elapsed();
     // the simplified chains' bytes (the written chains are in source order)
@@ -149,6 +162,18 @@ pub fn build_file_metered(
         times: FileTimes { read, build, write },
         warnings,
     })
+}
+
+/// `e` and its sources, joined by ": ".
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
 }
 
 /// Whether `a` and `b` name one file: the same path, the same file after

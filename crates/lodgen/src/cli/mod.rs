@@ -31,5 +31,7 @@ pub use job::{build_file, build_file_metered, BuiltFile, FileTimes};
 pub use measure::{
     check_sample_count, measure_files, measure_report, merged_mesh, MAX_AREA_SAMPLES,
 };
-pub use output::{build, report_to_stdout, stop_note, table, write_atomically, write_report};
+pub use output::{
+    build, check_report_path, report_to_stdout, stop_note, table, write_atomically, write_report,
+};
 pub use progress::BatchProgress;

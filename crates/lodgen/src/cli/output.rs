@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use serde_json::json;
 
 use crate::lod::MeshBuild;
@@ -255,6 +255,28 @@ fn report_json(
 /// the table).
 pub fn report_to_stdout(args: &BuildArgs) -> bool {
     args.report.as_deref() == Some(Path::new("-"))
+}
+
+/// Whether `--report PATH` can be written: its directory exists and it is
+/// no directory (checked before the work, so that a build is not thrown
+/// away, or its output left behind, for a mistyped report path).
+pub fn check_report_path(args: &BuildArgs) -> Result<()> {
+    let Some(path) = args.report.as_deref().filter(|p| *p != Path::new("-")) else {
+        return Ok(());
+    };
+    if path.is_dir() {
+        bail!("writing the report {}: it is a directory", path.display());
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            bail!(
+                "writing the report {}: the directory {} does not exist",
+                path.display(),
+                dir.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The `--report` JSON to `path`, or to standard output for `-`.

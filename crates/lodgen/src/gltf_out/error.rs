@@ -61,6 +61,9 @@ pub enum WriteError {
     Compress(String),
     #[error("the output exceeds the 4 GiB GLB limit")]
     TooLarge,
+    /// What a caller adds to the file ([`super::Addition`]) failed.
+    #[error("{0}")]
+    Addition(String),
     /// `--strict`: something of the input would not be carried over.
     #[error("{0} (--strict)")]
     Strict(crate::scene::Warning),

@@ -72,14 +72,14 @@ mod order;
 mod prepare;
 mod uvrange;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::scene::{LodMesh, Origin, Scene};
 
 use builder::Builder;
 use document::{flat_document, gltf_document, InputGltf};
 pub use error::{LevelProblem, WriteError};
-use files::{write_atomically, Format};
+use files::{write_atomically, Format, OutFile};
 pub use options::{Compression, MeshSummary, WriteOptions, WriteSummary};
 pub use prepare::PreparedLevels;
 use prepare::{material_count, prepare_chains};
@@ -130,6 +130,14 @@ fn output_format(path: &Path) -> Result<Format, WriteError> {
     }
 }
 
+/// What a caller adds to the file before it is written ([`write_lods_added`]):
+/// given the output's path and the main file's bytes, the new bytes and the
+/// side files to write with them, or why it failed.
+pub type Addition<'a> = &'a dyn Fn(&Path, Vec<u8>) -> Result<Added, String>;
+
+/// A main file's new bytes and the side files (path, bytes) to write with it.
+pub type Added = (Vec<u8>, Vec<(PathBuf, Vec<u8>)>);
+
 /// [`write_lods_with`], taking the levels `ready` holds (prepared while the
 /// build went on, [`PreparedLevels`]) instead of preparing them again: the
 /// same bytes.
@@ -140,6 +148,21 @@ pub fn write_lods_prepared(
     opts: &WriteOptions,
     strict: bool,
     ready: Option<&PreparedLevels>,
+) -> Result<WriteSummary, WriteError> {
+    write_lods_added(path, scene, lods, opts, strict, ready, None)
+}
+
+/// [`write_lods_prepared`], the main file's bytes passed through `add`
+/// (`lodgen --progressive` adds its stream there) before anything is
+/// written: on error nothing is, and an existing output stays as it was.
+pub fn write_lods_added(
+    path: &Path,
+    scene: &Scene,
+    lods: &[LodMesh],
+    opts: &WriteOptions,
+    strict: bool,
+    ready: Option<&PreparedLevels>,
+    add: Option<Addition<'_>>,
 ) -> Result<WriteSummary, WriteError> {
     let format = output_format(path)?;
     let mut chains = prepare_chains(scene, lods, material_count(scene), ready)?;
@@ -199,7 +222,16 @@ pub fn write_lods_prepared(
     if let (true, Some(w)) = (strict, summary.warnings.first()) {
         return Err(WriteError::Strict(w.clone()));
     }
-    let files = out.finish(&mut root, format, path, &stem)?;
+    let mut files = out.finish(&mut root, format, path, &stem)?;
+    if let Some(add) = add {
+        let main = std::mem::take(&mut files[0].parts).concat();
+        let (main, side) = add(path, main).map_err(WriteError::Addition)?;
+        files[0].parts = vec![main];
+        files.extend(side.into_iter().map(|(path, bytes)| OutFile {
+            path,
+            parts: vec![bytes],
+        }));
+    }
     write_atomically(&files)?;
     summary.files = files
         .iter()

@@ -96,20 +96,36 @@ pub fn read_scene_with(path: &Path, opts: &ReadOptions) -> Result<Scene, ReadErr
         .take(HEAD_BYTES)
         .read_to_end(&mut bytes)
         .map_err(io_err)?;
-    let format = detect_format(path, &bytes);
-    if format == Some(Format::Obj) {
-        return obj::read_obj_file(bytes, file, path);
+    // (a text file saved with a byte order mark, as Windows tools do)
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
     }
-    file.read_to_end(&mut bytes).map_err(io_err)?;
-    match detect_format(path, &bytes) {
-        Some(Format::Obj) => read_obj(&bytes, path),
-        Some(Format::Ply) => read_ply(&bytes, path),
-        Some(Format::Smf) => read_smf(&bytes, path),
-        Some(Format::Gltf) => read_gltf_with(&bytes, path, opts),
-        None => Err(ReadError::new(
+    let format = detect_format(path, &bytes);
+    let scene = if format == Some(Format::Obj) {
+        obj::read_obj_file(bytes, file, path)?
+    } else {
+        file.read_to_end(&mut bytes).map_err(io_err)?;
+        match detect_format(path, &bytes) {
+            Some(Format::Obj) => read_obj(&bytes, path)?,
+            Some(Format::Ply) => read_ply(&bytes, path)?,
+            Some(Format::Smf) => read_smf(&bytes, path)?,
+            // (`--strict` is the glTF reader's own: it names the place in the document)
+            Some(Format::Gltf) => return read_gltf_with(&bytes, path, opts),
+            None => {
+                return Err(ReadError::new(
+                    path,
+                    Location::File,
+                    ErrorKind::UnknownFormat,
+                ))
+            }
+        }
+    };
+    if let (true, Some(w)) = (opts.strict, scene.warnings.first()) {
+        return Err(ReadError::new(
             path,
             Location::File,
-            ErrorKind::UnknownFormat,
-        )),
+            ErrorKind::Invalid(format!("{w} (--strict)")),
+        ));
     }
+    Ok(scene)
 }

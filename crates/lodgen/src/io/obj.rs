@@ -24,9 +24,11 @@
 //!
 //! Materials: [`Scene::materials`] lists the `usemtl` names in order of first
 //! use. `mtllib` files are looked up beside the OBJ; a missing or unreadable
-//! library is not an error (the material then has no base colour). `Kd`
-//! becomes the base colour, with alpha from `d` (or `1 - Tr`); malformed MTL
-//! lines are ignored.
+//! library is not an error (the material then has no base colour) but a
+//! [`Scene::warnings`] entry, as is each texture map (`map_Kd`…) of a used
+//! material, which lodgen does not carry. `Kd` becomes the base colour, with
+//! alpha from `d` (or `1 - Tr`); malformed MTL lines are ignored. A UTF-8
+//! byte order mark before the first line is skipped ([`super::read_scene`]).
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -35,7 +37,7 @@ use std::path::Path;
 use super::common::{check_not_empty, file_stem, lines};
 use super::error::{ErrorKind, Location, ReadError};
 use super::obj_parse::{parse_batch, Chunk, Counts, Event, CHUNK_BYTES, NONE};
-use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh};
+use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh, Warning};
 
 /// How much of a file is read and parsed at once (whole lines; a longer
 /// line grows it).
@@ -189,8 +191,19 @@ fn rest_of_line(line: &str, keyword: &str) -> String {
     line[start..].trim().to_owned()
 }
 
-/// Collects `Kd` (and `d`/`Tr` for alpha) per `newmtl`.
-fn parse_mtl(text: &str, colors: &mut BTreeMap<String, [f32; 4]>) {
+/// MTL statements naming a texture map (or a bump / displacement map).
+const MTL_MAPS: [&str; 12] = [
+    "map_Ka", "map_Kd", "map_Ks", "map_Ns", "map_d", "map_Bump", "map_bump", "bump", "disp",
+    "decal", "refl", "norm",
+];
+
+/// Collects `Kd` (and `d`/`Tr` for alpha) per `newmtl`, and the texture
+/// maps each names (`map_Kd file`…: `maps`, which lodgen does not carry).
+fn parse_mtl(
+    text: &str,
+    colors: &mut BTreeMap<String, [f32; 4]>,
+    maps: &mut BTreeMap<String, Vec<String>>,
+) {
     let mut current: Option<String> = None;
     let mut alpha: Option<f32> = None;
     let mut seen_d = false;
@@ -217,6 +230,14 @@ fn parse_mtl(text: &str, colors: &mut BTreeMap<String, [f32; 4]>) {
                 );
                 if let (Some(name), Some(r), Some(g), Some(bl)) = (&current, r, g, bl) {
                     colors.insert(name.clone(), [r, g, bl, alpha.unwrap_or(1.0)]);
+                }
+            }
+            k if MTL_MAPS.contains(&k) => {
+                if let Some(name) = &current {
+                    let file = line.split_ascii_whitespace().last().unwrap_or("");
+                    maps.entry(name.clone())
+                        .or_default()
+                        .push(format!("{k} {file}"));
                 }
             }
             "d" | "Tr" => {
@@ -283,6 +304,10 @@ struct Builder<'a, L> {
     materials: Vec<String>,
     material_ids: BTreeMap<String, usize>,
     mtl_colors: BTreeMap<String, [f32; 4]>,
+    /// Per material, the texture maps its library names (not carried).
+    mtl_maps: BTreeMap<String, Vec<String>>,
+    /// What the scene will not carry (missing libraries, texture maps).
+    warnings: Vec<Warning>,
     pending_name: Option<String>,
     current_material: Option<usize>,
     current_mesh: Option<usize>,
@@ -305,6 +330,8 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             materials: Vec::new(),
             material_ids: BTreeMap::new(),
             mtl_colors: BTreeMap::new(),
+            mtl_maps: BTreeMap::new(),
+            warnings: Vec::new(),
             pending_name: None,
             current_material: None,
             current_mesh: None,
@@ -356,8 +383,17 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             }
             Event::Library(files) => {
                 for file in files {
-                    if let Some(bytes) = (self.load_mtl)(&file) {
-                        parse_mtl(&String::from_utf8_lossy(&bytes), &mut self.mtl_colors);
+                    match (self.load_mtl)(&file) {
+                        Some(bytes) => parse_mtl(
+                            &String::from_utf8_lossy(&bytes),
+                            &mut self.mtl_colors,
+                            &mut self.mtl_maps,
+                        ),
+                        None => self.warnings.push(Warning::new(
+                            format!("mtllib {file}"),
+                            "material library not found beside the OBJ: its materials are \
+                             written without their colours",
+                        )),
                     }
                 }
             }
@@ -507,6 +543,14 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
         // what the primitives no longer need goes first
         self.head = Vec::new();
         self.wedges = Vec::new();
+        for name in &self.materials {
+            for map in self.mtl_maps.get(name).map_or(&[][..], Vec::as_slice) {
+                self.warnings.push(Warning::new(
+                    format!("material `{name}`"),
+                    format!("{map}: texture maps are not carried (the base colour is)"),
+                ));
+            }
+        }
         let materials = self
             .materials
             .into_iter()
@@ -536,7 +580,7 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             meshes,
             materials,
             origin: Origin::Flat,
-            warnings: Vec::new(),
+            warnings: self.warnings,
         };
         check_not_empty(&scene, self.path)?;
         Ok(scene)

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use lodgen_pm::metric::{ErrorReport, MeasureOptions, MeshRef, Reference};
 use lodgen_pm::polish::Original;
 use lodgen_pm::{
-    levels, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh, Simplified,
-    SimplifyOptions, TopologyChange,
+    levels, levels::LevelSpec, simplify_adaptive, Mesh, MeshError, Method, ProgressiveMesh,
+    Simplified, SimplifyOptions, TopologyChange,
 };
 
 use crate::scene::{LodLevel, LodMesh, Primitive, Scene, SourceMesh, Warning};
@@ -302,7 +302,7 @@ fn build_mesh(
     let early = side_by_side
         && opts.measured
         && opts.method == Method::Qem
-        && sopts.target_triangles.is_none_or(|t| t < input_triangles);
+        && sopts.target_for(input_triangles) < input_triangles;
     let t_build = Instant::now();
     let mut welded = None;
     let again = side_by_side && sopts.topology_change == TopologyChange::WhenShort;
@@ -493,12 +493,34 @@ fn simplify_options(opts: &BuildOptions, full_tris: usize) -> Result<SimplifyOpt
             if specs.is_empty() {
                 return Err(BuildError::NoLevels);
             }
-            // Ratios refer to the welded, cleaned mesh; a bound on the raw
-            // count is only a lower bound of what is needed, so run to the
-            // smallest requested ratio / count of the input.
-            let target = levels::triangle_target(full_tris, specs).unwrap_or(0);
-            sopts.target_triangles = Some(target.max(opts.min_triangles.max(1)));
-            sopts.target_ratio = None;
+            // Ratios refer to the welded, cleaned mesh (the simplifier's
+            // input, which a ratio target of the core is taken of: with
+            // duplicated or degenerate faces the raw count is larger, and
+            // a target from it stopped the run above the coarsest level);
+            // the floor is a triangle target beside it (the larger stops).
+            let floor = opts.min_triangles.max(1);
+            let smallest = |ratio: bool| {
+                let of = |s: &LevelSpec| match (*s, ratio) {
+                    (LevelSpec::Ratio(r), true) => Some(r.clamp(0.0, 1.0)),
+                    (LevelSpec::Triangles(t), false) => Some(t as f64),
+                    _ => None,
+                };
+                specs.iter().filter_map(of).reduce(f64::min)
+            };
+            let by_error = specs.iter().any(|s| matches!(s, LevelSpec::MaxError(_)));
+            match (smallest(true), smallest(false), by_error) {
+                (Some(r), None, false) => {
+                    sopts.target_ratio = Some(r);
+                    sopts.target_triangles = Some(floor);
+                }
+                // counts alone, or both (then the ratio of the raw count:
+                // a count under it is what the run must reach anyway)
+                _ => {
+                    let target = levels::triangle_target(full_tris, specs).unwrap_or(0);
+                    sopts.target_triangles = Some(target.max(floor));
+                    sopts.target_ratio = None;
+                }
+            }
         }
         LevelRequest::MaxErrors(bounds) => {
             if bounds.is_empty() {
