@@ -1091,3 +1091,31 @@ fn bad_values_exit_2_and_a_bad_report_path_writes_nothing() {
     assert!(!out.exists(), "the output was written");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Ratios are of the welded, cleaned mesh: with every face written twice
+/// (the duplicates dropped), `2%` is 2 % of the torus's own triangles, the
+/// count the 50 % and 10 % levels are taken of too. (Fails when the run
+/// stops at 2 % of the raw count, twice the level's.)
+#[test]
+fn ratios_are_of_the_cleaned_mesh() {
+    let d = tmp("duplicated-faces");
+    let m = lodgen_pm::shapes::torus(1.0, 0.35, 48, 24);
+    let twice: Vec<[u32; 3]> = m.triangles.iter().chain(&m.triangles).copied().collect();
+    let input = d.join("twice.obj");
+    std::fs::write(&input, obj_text(&[("twice", &m.positions, &twice)])).unwrap();
+    let r = d.join("r.json");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "-o",
+        d.join("t.glb").to_str().unwrap(),
+        "--report",
+        r.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let counts = level_triangles(&report(&r));
+    let n = m.triangles.len() as u64;
+    assert_eq!(counts.len(), 3, "{counts:?}");
+    assert!(counts[0] <= n / 2 && counts[1] <= n / 10, "{counts:?}");
+    assert!(counts[2] <= n / 50, "{counts:?} (2 % of {n} is {})", n / 50);
+    let _ = std::fs::remove_dir_all(&d);
+}
