@@ -307,13 +307,14 @@ fn skins_survive_on_every_lod_node_unless_quantized() {
     check_round_trip(&path, &lod);
 
     // quantized: the dequantization is a node transform, which skinning
-    // ignores, so the skin goes
+    // ignores, so the skin goes, and with it the levels' joints and weights
+    // (a skinned mesh without its skin is what the glTF-Validator warns of)
     let path = dir.join("skinned_q.glb");
     let opts = WriteOptions {
         quantize: true,
         compression: Compression::None,
     };
-    write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
+    let summary = write_lods(&path, &scene, std::slice::from_ref(&lod), &opts).unwrap();
     let (json, _) = load_raw(&path);
     assert!(json.get("skins").is_none());
     assert!(json["nodes"]
@@ -321,6 +322,15 @@ fn skins_survive_on_every_lod_node_unless_quantized() {
         .unwrap()
         .iter()
         .all(|n| n.get("skin").is_none()));
+    for m in json["meshes"].as_array().unwrap() {
+        let attributes = &m["primitives"][0]["attributes"];
+        assert!(attributes.get("JOINTS_0").is_none() && attributes.get("WEIGHTS_0").is_none());
+    }
+    let w: Vec<String> = summary.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        w.iter().any(|w| w.contains("JOINTS_n / WEIGHTS_n")),
+        "{w:?}"
+    );
 }
 
 /// A one-mesh scene read from `in.gltf` (its JSON `json`, one buffer

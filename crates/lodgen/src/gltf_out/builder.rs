@@ -63,6 +63,9 @@ pub(super) struct Builder {
     pub(super) uv_ranges: Vec<Option<lodgen_pm::stream::Range>>,
     /// Whether some material got `KHR_texture_transform`.
     pub(super) texture_transform: bool,
+    /// The input's skins are dropped (`--quantize`): the levels' JOINTS_n
+    /// and WEIGHTS_n are not written either.
+    pub(super) drop_skinning: bool,
 }
 
 pub(super) fn align4(v: &mut Vec<u8>) {
@@ -121,6 +124,7 @@ impl Builder {
             warnings: Vec::new(),
             uv_ranges: Vec::new(),
             texture_transform: false,
+            drop_skinning: false,
         }
     }
 
@@ -285,6 +289,11 @@ impl Builder {
         // u16 joints, or with `quantize` the compact formats the core spec
         // and KHR_mesh_quantization allow (module docs).
         for a in other_attributes(p, self.opts.quantize) {
+            if self.drop_skinning
+                && (a.name.starts_with("JOINTS_") || a.name.starts_with("WEIGHTS_"))
+            {
+                continue;
+            }
             let (view, b) = self.view(
                 segment,
                 Payload::Attribute {

@@ -127,8 +127,9 @@ pub(super) fn keep_skins(
         out.warnings.push(Warning::new(
             "skins",
             format!(
-                "{} skin(s) dropped: --quantize puts the dequantization in node transforms, \
-                 which skinning ignores (write without --quantize to keep them)",
+                "{} skin(s) dropped, with the levels' JOINTS_n / WEIGHTS_n: --quantize puts the \
+                 dequantization in node transforms, which skinning ignores (write without \
+                 --quantize to keep them)",
                 skins.len()
             ),
         ));

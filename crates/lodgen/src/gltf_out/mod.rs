@@ -27,7 +27,7 @@
 //!   every LOD node keeps the `skin` of the node it replaces (the levels
 //!   carry JOINTS_n / WEIGHTS_n), except with `quantize`, whose
 //!   dequantization lives in node transforms that skinning ignores: then
-//!   skins are dropped. `weights` channels and the nodes' morph `weights`
+//!   skins are dropped, and the levels' JOINTS_n / WEIGHTS_n with them. `weights` channels and the nodes' morph `weights`
 //!   are dropped since the new meshes have no morph targets.
 //! - With `quantize`, positions are normalized `i16` in a cube around the
 //!   chain's bounding box; the dequantization (translation + uniform scale) is
@@ -174,6 +174,10 @@ pub fn write_lods_added(
 
     let mut out = Builder::new(level_count, opts);
     out.warnings = warnings;
+    if let Origin::Gltf { json, .. } = &scene.origin {
+        let skins = json.get("skins").and_then(|s| s.as_array());
+        out.drop_skinning = opts.quantize && skins.is_some_and(|s| !s.is_empty());
+    }
     if let Origin::Gltf { json, .. } = &scene.origin {
         let materials = json.get("materials").and_then(|m| m.as_array());
         let materials = materials.map_or(&[][..], Vec::as_slice);
