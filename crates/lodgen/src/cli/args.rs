@@ -351,6 +351,10 @@ pub fn parse_levels(list: &str) -> Result<Vec<LevelSpec>> {
                 bail!("--levels: a level needs at least one triangle");
             }
             LevelSpec::Triangles(n)
+        } else if item.bytes().all(|b| b.is_ascii_digit()) {
+            // a count beyond any mesh (as any count above the mesh's: the
+            // whole mesh), not a fraction
+            LevelSpec::Triangles(usize::MAX)
         } else {
             let v: f64 = item.parse().with_context(|| {
                 format!(
@@ -603,5 +607,30 @@ pub fn default_output(input: &Path) -> PathBuf {
         input.with_file_name(name)
     } else {
         candidate
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A count too large for the machine is a count (the whole mesh, as any
+    /// count above it), not a fraction out of range; the other forms as
+    /// documented. (Fails when `2^64` is called a fraction.)
+    #[test]
+    fn level_forms() {
+        let l = parse_levels("50%, 0.1,20000,18446744073709551616").unwrap();
+        assert_eq!(
+            l,
+            [
+                LevelSpec::Ratio(0.5),
+                LevelSpec::Ratio(0.1),
+                LevelSpec::Triangles(20000),
+                LevelSpec::Triangles(usize::MAX)
+            ]
+        );
+        let e = parse_levels("1.5").unwrap_err().to_string();
+        assert!(e.contains("fraction \"1.5\" must be in (0, 1]"), "{e}");
+        assert!(parse_levels("0").is_err() && parse_levels("50%,").is_err());
     }
 }
