@@ -68,6 +68,19 @@ pub fn options_hash(args: &BuildArgs) -> String {
     a.quiet = false;
     a.verbose = false;
     a.batch = BatchFlags::default();
+    // the levels as they are built: finest first, once each, whatever the
+    // spelling (`50%,10%` = `0.1,0.5` = `0.5,0.1,0.1`)
+    if let Ok(mut specs) = cli::parse_levels(&a.levels) {
+        let key = |s: &lodgen_pm::levels::LevelSpec| format!("{s:?}");
+        specs.sort_by_key(key);
+        specs.dedup();
+        a.levels = format!("{specs:?}");
+    }
+    if let Some(Ok(mut bounds)) = a.max_error.as_deref().map(cli::parse_max_errors) {
+        bounds.sort_by(f64::total_cmp);
+        bounds.dedup();
+        a.max_error = Some(format!("{bounds:?}"));
+    }
     let text = format!("lodgen {} {:?}", env!("CARGO_PKG_VERSION"), a);
     blake3::hash(text.as_bytes()).to_hex().to_string()
 }

@@ -310,6 +310,19 @@ fn a_rerun_skips_everything_and_force_rebuilds() {
         (Some(1), Some(2))
     );
     assert_eq!(std::fs::read(root.join("out/torus.glb")).unwrap(), good);
+
+    // The same levels spelled otherwise are the same options.
+    let args = [
+        "in",
+        "--out-dir",
+        "out",
+        "--levels",
+        "0.3,30%",
+        "--report",
+        "r8.json",
+    ];
+    assert!(lodgen(&args, root).status.success());
+    assert_eq!(read_report(&root.join("r8.json"))["skipped"], 3);
 }
 
 /// What a walk or a command line can name more than once or not at all: a
