@@ -522,3 +522,35 @@ fn fins_contract_along_the_edges_they_share() {
         }
     }
 }
+
+/// A mesh scaled by a power of two simplifies to the same triangles, its
+/// positions scaled by exactly that power, however far from 1 its size is:
+/// the `f32` keys of the pairs (length⁴) were taken as they came, so at 2⁻⁴⁰
+/// they underflowed to zero and the contractions came in another order, at
+/// 2⁴⁰ they overflowed (`simplify::cost_unit`). The whole-mesh walk and the
+/// partitioned one (a mesh of 8+ clusters).
+#[test]
+fn a_mesh_simplifies_alike_at_any_scale() {
+    for (m, ratio) in [
+        (lodgen_pm::shapes::torus_knot(2, 3, 240, 24, 0.02), 0.1),
+        (lodgen_pm::shapes::torus_knot(2, 3, 1600, 48, 0.02), 0.05),
+    ] {
+        let opts = SimplifyOptions::DEFAULT.with_target_ratio(ratio);
+        let run = |s: f32| {
+            let p: Vec<[f32; 3]> = m.positions.iter().map(|v| v.map(|c| c * s)).collect();
+            let out = simplify(&p, &m.indices(), &opts).unwrap();
+            out.pm.mesh_at_splits(0)
+        };
+        let one = run(1.0);
+        for e in [-40, -12, 12, 40] {
+            let s = 2f32.powi(e);
+            let scaled = run(s);
+            assert!(
+                scaled.triangles == one.triangles,
+                "scale 2^{e}: other triangles"
+            );
+            let back: Vec<[f32; 3]> = one.positions.iter().map(|v| v.map(|c| c * s)).collect();
+            assert!(scaled.positions == back, "scale 2^{e}: other positions");
+        }
+    }
+}

@@ -101,13 +101,14 @@ impl Simplifier {
         self.scaled(cost + self.hole_cost(a, b), a, b)
     }
 
-    /// The heap key from the pair's cost: times the cost scale, as `f32`.
+    /// The heap key from the pair's cost: times the cost scale and the cost
+    /// unit ([`super::cost_unit`]), as `f32`.
     #[inline]
     pub(super) fn scaled(&self, mut cost: f64, a: u32, b: u32) -> f32 {
         if let Some(s) = &self.cost_scale {
             cost *= f64::from(s[a as usize].max(s[b as usize]));
         }
-        cost as f32
+        (cost * self.cost_unit) as f32
     }
 
     /// Neither locked, pinned nor fixed: a pair of two such vertices takes

@@ -146,6 +146,9 @@ pub struct Simplifier {
     /// Optional per-vertex multiplier of pair costs (curvature-weighted
     /// modes): a pair costs `cost × max(scale[a], scale[b])`.
     cost_scale: Option<Vec<f32>>,
+    /// The power of two every key is multiplied by before it is an `f32`
+    /// ([`cost_unit`]).
+    cost_unit: f64,
     /// Feature edges and wedges, when set (`set_feature_edges`,
     /// `set_wedges`): feature vertices obey the border rule below.
     features: Option<Features>,
@@ -498,4 +501,30 @@ impl Simplifier {
         }
         (pm, self.stats)
     }
+}
+
+/// The unit of a mesh's keys: `2^(−4k)`, `2^k` the power of two nearest
+/// its bounding-box diagonal `d`. Keys are area × squared distance
+/// (length⁴) in `f32`: taken as they came, at `d` ≈ 10⁻⁹ they underflowed to
+/// zero and the contractions came in another order, at 10¹⁰ they
+/// overflowed. In this unit they are those of the mesh scaled to a
+/// diagonal near 1, and a power of two changes no comparison: a mesh
+/// scaled by a power of two simplifies to the same triangles, its positions
+/// scaled by exactly that power (the spread bound, a squared distance, is
+/// taken in mesh units: `Pass::defers`).
+pub(crate) fn cost_unit(positions: &[[f32; 3]]) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(f64::from(p[k]));
+            hi[k] = hi[k].max(f64::from(p[k]));
+        }
+    }
+    let d = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    if !(d > 0.0 && d.is_finite()) {
+        return 1.0;
+    }
+    let k = d.log2().round() as i32;
+    2f64.powi(-4 * k)
 }

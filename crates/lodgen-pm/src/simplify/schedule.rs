@@ -272,7 +272,7 @@ impl Simplifier {
             if pass.touched[e.a as usize] == n || pass.touched[e.b as usize] == n {
                 continue;
             }
-            if pass.defers(&self.quadric, e) {
+            if pass.defers(&self.quadric, e, self.cost_unit) {
                 pass.deferred += 1;
                 continue;
             }
@@ -408,7 +408,8 @@ impl Simplifier {
             .step_by(step)
             .filter_map(|e| {
                 let w = self.quadric[e.a as usize].weight + self.quadric[e.b as usize].weight;
-                (w > 0.0).then(|| f64::from(e.cost) / w)
+                // (in mesh units: the key without its unit, a power of two)
+                (w > 0.0).then(|| f64::from(e.cost) / self.cost_unit / w)
             })
             .collect();
         if spread.is_empty() {
@@ -523,11 +524,11 @@ impl Pass {
     /// Whether the candidate `e` waits for a later pass: its cost per unit
     /// of its quadrics' weight is over the pass's spread bound.
     #[inline]
-    pub(super) fn defers(&self, quadric: &[Quadric], e: PassEntry) -> bool {
+    pub(super) fn defers(&self, quadric: &[Quadric], e: PassEntry, unit: f64) -> bool {
         if self.spread_limit == f64::INFINITY {
             return false;
         }
         let w = quadric[e.a as usize].weight + quadric[e.b as usize].weight;
-        f64::from(e.cost) > self.spread_limit * w && w > 0.0
+        f64::from(e.cost) / unit > self.spread_limit * w && w > 0.0
     }
 }

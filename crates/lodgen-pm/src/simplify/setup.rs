@@ -50,6 +50,7 @@ impl Simplifier {
             Vec::new()
         };
 
+        let cost_unit = super::cost_unit(&mesh.positions);
         let mut s = Simplifier {
             opts: *opts,
             target: opts.target_for(nt),
@@ -87,6 +88,7 @@ impl Simplifier {
             fan_scratch: Vec::new(),
             plan_scratch: Vec::new(),
             cost_scale: None,
+            cost_unit,
             features: None,
             attributes: None,
             meter: None,

@@ -70,7 +70,7 @@ impl Simplifier {
             let e = pass.queue[scan];
             let (a, b) = (e.a as usize, e.b as usize);
             if pass.touched[a] != n && pass.touched[b] != n {
-                if pass.defers(&self.quadric, e) {
+                if pass.defers(&self.quadric, e, self.cost_unit) {
                     deferred += 1;
                     scan += 1;
                     continue;

@@ -410,6 +410,7 @@ impl Simplifier {
             scratch: Vec::new(),
             fan_scratch: Vec::new(),
             plan_scratch: Vec::new(),
+            cost_unit: self.cost_unit,
             cost_scale: self
                 .cost_scale
                 .as_ref()
