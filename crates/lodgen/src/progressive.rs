@@ -164,6 +164,9 @@ pub struct Found {
     /// `[mesh]` when no node lists it.
     pub lod_meshes: Vec<usize>,
     pub screen_coverage: Vec<f64>,
+    /// Streams in the document, this one included (one per chain that
+    /// carries one: `lodgen --progressive` on a scene of several meshes).
+    pub streams: usize,
 }
 
 fn index(v: &Value, path: &str) -> Result<usize, ProgressiveError> {
@@ -215,6 +218,12 @@ pub fn find(root: &Value) -> Result<Option<Found>, ProgressiveError> {
                 )?,
             );
             let (lod_meshes, screen_coverage) = lod_chain(root, m);
+            let streams = meshes
+                .iter()
+                .filter_map(|mesh| mesh.get("primitives").and_then(Value::as_array))
+                .flatten()
+                .filter(|prim| prim.pointer(&format!("/extensions/{EXTENSION}")).is_some())
+                .count();
             return Ok(Some(Found {
                 mesh: m,
                 primitive: p,
@@ -223,6 +232,7 @@ pub fn find(root: &Value) -> Result<Option<Found>, ProgressiveError> {
                 range,
                 lod_meshes,
                 screen_coverage,
+                streams,
             }));
         }
     }

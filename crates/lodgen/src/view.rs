@@ -199,6 +199,16 @@ impl ViewData {
             if let Some((found, stream)) = found {
                 decode(&stream)
                     .with_context(|| format!("{}: decoding the stream", path.display()))?;
+                if found.streams > 1 {
+                    // (the viewer streams one chain)
+                    eprintln!(
+                        "lodgen view: {} carries {} streams (one per mesh); showing the first, \
+                         mesh {}'s; the others are not shown",
+                        path.display(),
+                        found.streams,
+                        found.mesh
+                    );
+                }
                 return Ok(ViewData {
                     name,
                     stream,

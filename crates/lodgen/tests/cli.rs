@@ -1119,3 +1119,32 @@ fn ratios_are_of_the_cleaned_mesh() {
     assert!(counts[2] <= n / 50, "{counts:?} (2 % of {n} is {})", n / 50);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `lodgen view` streams one chain: on a file of several (a scene of two
+/// meshes with `--progressive`) it says which it shows and that the others
+/// are not shown. (Fails when it shows the first silently.)
+#[test]
+fn view_says_when_it_shows_one_of_several_streams() {
+    let d = tmp("view-streams");
+    let a = lodgen_pm::shapes::torus(1.0, 0.35, 24, 12);
+    let b = lodgen_pm::shapes::torus(2.0, 0.5, 24, 12);
+    let input = d.join("two.obj");
+    let text = obj_text(&[
+        ("a", &a.positions, &a.triangles),
+        ("b", &b.positions, &b.triangles),
+    ]);
+    std::fs::write(&input, text).unwrap();
+    let out = d.join("two.glb");
+    let o = lodgen(&[
+        input.to_str().unwrap(),
+        "--progressive",
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lodgen(&["view", out.to_str().unwrap(), "--print-levels"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("carries 2 streams"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&d);
+}

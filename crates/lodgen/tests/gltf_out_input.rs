@@ -432,3 +432,64 @@ fn quantized_uvs_leaving_the_unit_square_take_a_texture_transform() {
     }
     support::validate(&dir);
 }
+
+/// A node with a mesh and children (a car body and its wheels) keeps its
+/// transform and children and takes its chain on a new child: an MSFT_lod
+/// level replaces its node with the node's whole subtree, so LOD nodes
+/// beside the node left its children at level 0 only (three.js dropped the
+/// wheels at a distance). Plain and quantized alike. (Fails when the chain
+/// sits on the node itself.)
+#[test]
+fn a_mesh_node_with_children_keeps_them_at_every_level() {
+    let (positions, indices) = icosphere(2, 1.0, [0.0; 3]);
+    let prim = Primitive {
+        positions,
+        indices,
+        ..Primitive::default()
+    };
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"name": "body", "mesh": 0, "children": [1], "translation": [1.0, 2.0, 3.0]},
+            {"name": "wheel", "translation": [0.0, -1.0, 0.0]}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"componentType": 5126, "count": 3, "type": "VEC3"}]
+    });
+    let (scene, lod) = gltf_origin_chain("body", prim, Vec::new(), json, Vec::new());
+    let dir = scratch("children");
+    for (name, quantize, summary) in [
+        ("plain.glb", false, "children_plain"),
+        ("q.glb", true, "children_q"),
+    ] {
+        let opts = WriteOptions {
+            quantize,
+            compression: Compression::None,
+        };
+        let (json, _, _) = write_and_load(&dir.join(name), &scene, &lod, &opts, summary);
+        let nodes = json["nodes"].as_array().unwrap();
+        let body = &nodes[0];
+        assert!(body.get("mesh").is_none(), "{name}: {body}");
+        assert_eq!(body["translation"], serde_json::json!([1.0, 2.0, 3.0]));
+        let children: Vec<u64> = body["children"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_u64().unwrap())
+            .collect();
+        assert_eq!(children[0], 1, "{name}: the wheel stays");
+        let lod0 = &nodes[children[1] as usize];
+        assert!(lod0.get("mesh").is_some(), "{name}: {lod0}");
+        let ids = lod0["extensions"]["MSFT_lod"]["ids"].as_array().unwrap();
+        assert_eq!(ids.len(), 2, "{name}");
+        for id in ids {
+            let n = &nodes[id.as_u64().unwrap() as usize];
+            assert!(
+                n.get("mesh").is_some() && n.get("children").is_none(),
+                "{name}"
+            );
+        }
+    }
+}

@@ -219,7 +219,8 @@ fn drop_mesh_node_extensions(nodes: &mut [Value], warnings: &mut Vec<Warning>) {
 }
 
 /// Nodes: each node with a mesh gets that mesh's chain (with `quantize`, on
-/// a new child node that carries the dequantization).
+/// a new child node that carries the dequantization; a node with children
+/// too, on a new child with no transform).
 fn attach_chains(
     root: &mut Map<String, Value>,
     document: &gltf_json::Root,
@@ -241,8 +242,8 @@ fn attach_chains(
     };
     drop_mesh_node_extensions(&mut nodes, warnings);
     let original_count = nodes.len();
-    // with `quantize`, the node whose mesh moves to a new child: its morph
-    // weights (and their animation channels) go with the mesh
+    // the node whose mesh moves to a new child (`quantize`, or children):
+    // its morph weights (and their animation channels) go with the mesh
     let mut moved_to: Vec<(usize, usize)> = Vec::new();
     // the nodes that draw a mesh with morph targets, as written
     let mut morphed: Vec<usize> = Vec::new();
@@ -266,16 +267,31 @@ fn attach_chains(
             .get("name")
             .and_then(Value::as_str)
             .map_or_else(|| chain.name.clone(), String::from);
-        if quantize {
-            // The dequantization lives on new child nodes.
-            let mut weights = None;
+        // A node with children keeps them (and its transform) and gets its
+        // chain on a new child: an MSFT_lod level replaces its node with its
+        // whole subtree, so LOD nodes beside the node would draw the
+        // children at level 0 only (a car's wheels gone at a distance).
+        let has_children = nodes[i]
+            .get("children")
+            .and_then(Value::as_array)
+            .is_some_and(|c| !c.is_empty());
+        if quantize || has_children {
+            // The dequantization (with `quantize`) lives on new child nodes.
+            let (mut weights, mut skin) = (None, None);
             if let Some(obj) = nodes[i].as_object_mut() {
                 obj.remove("mesh");
-                obj.remove("skin");
+                skin = obj.remove("skin");
                 weights = obj.remove("weights");
             }
-            let mut transform = dequant_transform(chain, true);
-            if let Some(w) = weights {
+            let mut transform = if quantize {
+                dequant_transform(chain, true)
+            } else {
+                Map::new()
+            };
+            if let (false, Some(s)) = (quantize, skin) {
+                transform.insert("skin".into(), s);
+            }
+            if let Some(w) = weights.filter(|_| quantize || has_targets(chain)) {
                 transform.insert("weights".into(), w);
             }
             let mut node = transform.clone();
