@@ -426,3 +426,20 @@ fn truncations_and_corruptions_never_panic() {
         let _ = read_gltf(&bytes, Path::new("flip.glb"));
     }
 }
+
+/// A primitive naming a material that does not exist is read without one,
+/// with a warning naming it (an error with `--strict`), instead of the
+/// whole file refused. (Fails when the index fails the file.)
+#[test]
+fn a_missing_material_is_a_warning_not_an_error() {
+    let s = read_edited(|doc| doc["meshes"][1]["primitives"][0]["material"] = json!(9));
+    let w: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.starts_with("meshes[1].primitives[0].material: material 9 does not exist")),
+        "{w:?}"
+    );
+    assert_eq!(s.meshes[1].primitives[0].material, None);
+    let e = broken(|doc, _| doc["meshes"][1]["primitives"][0]["material"] = json!(9));
+    assert!(e.to_string().contains("material 9 does not exist"), "{e}");
+}
