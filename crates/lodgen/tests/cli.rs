@@ -1148,3 +1148,37 @@ fn view_says_when_it_shows_one_of_several_streams() {
     assert!(stderr(&o).contains("carries 2 streams"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// lodgen on its own output: the input's coarser levels give way to the
+/// levels lodgen makes of the finest, with a warning each, instead of each
+/// old level getting a chain of its own beside the new one. (Fails when the
+/// old levels are read as meshes.)
+#[test]
+fn an_lod_file_is_made_again_from_its_finest_level() {
+    let d = tmp("relod");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let a = d.join("a.glb");
+    let b = d.join("b.glb");
+    let o = lodgen(&[input.to_str().unwrap(), "-o", a.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = d.join("r.json");
+    let o = lodgen(&[
+        a.to_str().unwrap(),
+        "-o",
+        b.to_str().unwrap(),
+        "--report",
+        r.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(
+        err.matches("MSFT_lod chain in the input: left out").count(),
+        2,
+        "{err}"
+    );
+    let rep = report(&r);
+    assert_eq!(rep["meshes"].as_array().unwrap().len(), 1, "{rep}");
+    assert_eq!(level_triangles(&rep).len(), 3, "{rep}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -195,7 +195,8 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         })
         .collect();
     let mut warnings = material_warnings;
-    let meshes = r.meshes(&root, &buffers, &mut warnings)?;
+    let replaced = lod_level_meshes(&raw, root.meshes.len());
+    let meshes = r.meshes(&root, &buffers, &replaced, &mut warnings)?;
     let scene = Scene {
         meshes,
         materials,
@@ -216,6 +217,47 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         None => e,
     })?;
     Ok(scene)
+}
+
+/// Per mesh, when every node that draws it is a coarser level of another
+/// node's `MSFT_lod` chain (a file lodgen or another tool made LODs of):
+/// that node (one of them, if several). Such meshes are not read: the
+/// chain is made again from its finest level.
+fn lod_level_meshes(raw: &serde_json::Value, meshes: usize) -> Vec<Option<usize>> {
+    let nodes = raw
+        .get("nodes")
+        .and_then(serde_json::Value::as_array)
+        .map_or(&[][..], Vec::as_slice);
+    let mut level_of: Vec<Option<usize>> = vec![None; nodes.len()];
+    for (n, node) in nodes.iter().enumerate() {
+        let ids = node.pointer("/extensions/MSFT_lod/ids");
+        for id in ids
+            .and_then(serde_json::Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            let slot = id.as_u64().and_then(|i| level_of.get_mut(i as usize));
+            if let Some(slot @ None) = slot {
+                *slot = Some(n);
+            }
+        }
+    }
+    let mut out: Vec<Option<Option<usize>>> = vec![None; meshes];
+    for (n, node) in nodes.iter().enumerate() {
+        let Some(m) = node.get("mesh").and_then(serde_json::Value::as_u64) else {
+            continue;
+        };
+        let Some(slot) = out.get_mut(m as usize) else {
+            continue;
+        };
+        // (a level node that is also some chain's finest, or a plain node,
+        // keeps the mesh)
+        *slot = match (*slot, level_of[n]) {
+            (None, owner) | (Some(Some(_)), owner @ Some(_)) if owner != Some(n) => Some(owner),
+            _ => Some(None),
+        };
+    }
+    out.into_iter().map(Option::flatten).collect()
 }
 
 pub(super) struct Reader<'a> {
@@ -388,12 +430,29 @@ impl Reader<'_> {
         &self,
         root: &Root,
         buffers: &[Vec<u8>],
+        replaced: &[Option<usize>],
         warnings: &mut Vec<Warning>,
     ) -> Result<Vec<SourceMesh>, ReadError> {
         let mut meshes = Vec::with_capacity(root.meshes.len());
         for (mi, mesh) in root.meshes.iter().enumerate() {
             let name = mesh.name.clone().unwrap_or_else(|| format!("mesh{mi}"));
             let mut primitives = Vec::new();
+            if let Some(&Some(node)) = replaced.get(mi) {
+                // (lodgen on its own output: the old levels give way to new)
+                warnings.push(Warning::new(
+                    format!("meshes[{mi}] (mesh `{name}`)"),
+                    format!(
+                        "a level of node {node}'s MSFT_lod chain in the input: left out, \
+                         replaced by the levels lodgen makes of its finest"
+                    ),
+                ));
+                if self.strict {
+                    let w = &warnings[warnings.len() - 1];
+                    return Err(self.json_err(&format!("meshes[{mi}]"), w.message.clone()));
+                }
+                meshes.push(SourceMesh { name, primitives });
+                continue;
+            }
             for (pi, prim) in mesh.primitives.iter().enumerate() {
                 let at = format!("meshes[{mi}].primitives[{pi}]");
                 let place = format!("{at} (mesh `{name}`)");
