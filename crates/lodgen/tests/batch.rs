@@ -466,7 +466,10 @@ fn a_changed_companion_file_rebuilds_its_input() {
     std::fs::write(root.join("t.obj"), obj_text(&torus)).unwrap();
     // (one level: a file of MSFT_lod chains would be made again from its
     // finest levels, with warnings)
-    let o = lodgen(&["t.obj", "-o", "src/b.gltf", "--levels", "100%", "-q"], root);
+    let o = lodgen(
+        &["t.obj", "-o", "src/b.gltf", "--levels", "100%", "-q"],
+        root,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let bins: Vec<PathBuf> = walk(&root.join("src"))
         .into_iter()

@@ -114,28 +114,7 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         .filter(|e| !passes_through(e))
         .cloned()
         .collect();
-    // a primitive's material that does not exist: the primitive is read
-    // without one (a warning; `--strict`: an error), not the file refused
-    let mut material_warnings = Vec::new();
-    let material_count = root.materials.len();
-    for (mi, mesh) in root.meshes.iter_mut().enumerate() {
-        for (pi, prim) in mesh.primitives.iter_mut().enumerate() {
-            let Some(m) = prim.material.filter(|m| m.value() >= material_count) else {
-                continue;
-            };
-            let at = format!("meshes[{mi}].primitives[{pi}].material");
-            let what = format!(
-                "material {} does not exist ({material_count} defined): the primitive is \
-                 written without a material",
-                m.value()
-            );
-            if r.strict {
-                return Err(r.json_err(&at, what));
-            }
-            prim.material = None;
-            material_warnings.push(Warning::new(at, what));
-        }
-    }
+    let material_warnings = missing_materials(&r, &mut root)?;
     // the gltf crate's validation indexes POSITION accessors unchecked
     for (mi, mesh) in root.meshes.iter().enumerate() {
         for (pi, prim) in mesh.primitives.iter().enumerate() {
@@ -217,6 +196,32 @@ pub fn read_gltf_with(src: &[u8], path: &Path, opts: &ReadOptions) -> Result<Sce
         None => e,
     })?;
     Ok(scene)
+}
+
+/// A primitive's material that does not exist: the primitive is read
+/// without one, with a warning (`--strict`: an error), not the file refused.
+fn missing_materials(r: &Reader<'_>, root: &mut Root) -> Result<Vec<Warning>, ReadError> {
+    let mut material_warnings = Vec::new();
+    let material_count = root.materials.len();
+    for (mi, mesh) in root.meshes.iter_mut().enumerate() {
+        for (pi, prim) in mesh.primitives.iter_mut().enumerate() {
+            let Some(m) = prim.material.filter(|m| m.value() >= material_count) else {
+                continue;
+            };
+            let at = format!("meshes[{mi}].primitives[{pi}].material");
+            let what = format!(
+                "material {} does not exist ({material_count} defined): the primitive is \
+                 written without a material",
+                m.value()
+            );
+            if r.strict {
+                return Err(r.json_err(&at, what));
+            }
+            prim.material = None;
+            material_warnings.push(Warning::new(at, what));
+        }
+    }
+    Ok(material_warnings)
 }
 
 /// Per mesh, when every node that draws it is a coarser level of another
