@@ -506,7 +506,13 @@ fn parse_range(value: &str, len: usize) -> Option<Result<std::ops::Range<usize>,
         let end = if b.is_empty() {
             len
         } else {
-            b.parse::<usize>().ok()?.saturating_add(1).min(len)
+            let last = b.parse::<usize>().ok()?;
+            // (last before first: an invalid range, so the header is
+            // ignored — RFC 9110 §14.1.1)
+            if last < start {
+                return None;
+            }
+            last.saturating_add(1).min(len)
         };
         start..end
     };
@@ -626,6 +632,7 @@ mod tests {
         assert_eq!(parse_range("bytes=0-1,5-6", 100), None);
         assert_eq!(parse_range("items=0-1", 100), None);
         assert_eq!(parse_range("bytes=x-1", 100), None);
+        assert_eq!(parse_range("bytes=5-2", 100), None);
     }
 
     #[test]
