@@ -69,7 +69,11 @@ impl Simplifier {
         self.boundary[i1] |= self.boundary[i0];
         self.corner[i1] |= self.corner[i0];
         if let Some(f) = &mut self.features {
+            let end = f.is_end(v0);
             f.contract(v0, v1);
+            if end {
+                f.mark_seams(v1, &self.tris, self.vtris.fan(v1));
+            }
         }
         if let Some(o) = hole {
             if let Some(f) = &mut self.features {

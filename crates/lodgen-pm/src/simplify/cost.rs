@@ -30,7 +30,7 @@ impl Simplifier {
             // the next collapse along the other line cuts it off: borders
             // creep. Other border vertices take optimal placement, held to
             // the border by its constraint planes. Feature vertices follow
-            // the corners' rule (`pinned`), and a seam corner is never the
+            // the corners' rule (`pinned`), and a seam junction is never the
             // one removed (`fixed`).
             (false, false) if self.pinned(a) && !self.pinned(b) || self.fixed(a) => {
                 (pa, q.eval(pa))
@@ -64,7 +64,7 @@ impl Simplifier {
         self.corner[v as usize] || self.features.as_ref().is_some_and(|f| f.pinned(v))
     }
 
-    /// A seam corner or end: never removed.
+    /// A seam junction (three or more feature edges): never removed.
     #[inline]
     pub(super) fn fixed(&self, v: u32) -> bool {
         self.features.as_ref().is_some_and(|f| f.fixed(v))

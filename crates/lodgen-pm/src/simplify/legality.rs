@@ -43,7 +43,7 @@ pub enum Rejected {
     /// The contraction's error exceeds `max_error`.
     Error,
     /// A feature vertex (seam, material border, hard edge) would leave its
-    /// feature line, or a seam corner would be removed (see `features`).
+    /// feature line, or a seam junction would be removed (see `features`).
     Feature,
 }
 
