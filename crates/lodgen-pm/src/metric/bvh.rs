@@ -290,6 +290,19 @@ impl TriangleBvh {
             .map(|(d2, h, q)| (d2, self.ids[h.slot as usize], q))
     }
 
+    /// [`Self::closest_point`] with the answer's [`Hint`], starting from `hint` (the answer to
+    /// a nearby previous query): the same answer, found faster when queries come in spatial
+    /// order.
+    #[inline]
+    pub(crate) fn closest_point_from(
+        &self,
+        p: [f64; 3],
+        hint: Option<Hint>,
+    ) -> Option<(f64, u32, [f64; 3], Hint)> {
+        self.closest_slot(p, hint)
+            .map(|(d2, h, q)| (d2, self.ids[h.slot as usize], q, h))
+    }
+
     /// Like [`Self::closest_point`], but first measures the triangle of `hint` (the answer to
     /// a nearby previous query), whose distance bounds the search from the start, and searches
     /// upwards from its leaf. Returns where the answer lies (its slot, not its triangle

@@ -213,6 +213,7 @@ impl Sums {
         let chart = charts(src.positions.len(), src.triangles);
         let level_chart: Vec<u32> = level.wedges.iter().map(|w| chart[w[0] as usize]).collect();
         let p3 = |ps: &[[f32; 3]], v: u32| ps[v as usize].map(f64::from);
+        let (chart, level_chart) = (&chart, &level_chart);
         let nl = level.triangles.len();
         let mut block = vec![0.0f64; 9 * nl];
         let mut rhs0 = vec![0.0f64; 3 * dims * nl];
@@ -226,12 +227,16 @@ impl Sums {
                 .collect::<Vec<usize>>()
                 .par_chunks(CHUNK)
                 .flat_map_iter(|chunk| {
-                    chunk.iter().map(|&i| {
+                    // (consecutive samples lie on one input triangle or the next: each
+                    // query starts from the previous answer; the answer is the same)
+                    let mut hint = None;
+                    chunk.iter().map(move |&i| {
                         let tri = src.triangles[i / RULE.len()];
                         let [a, b, c] = tri.map(|v| p3(src.positions, v));
                         let g = RULE[i % RULE.len()].0;
                         let p = [0, 1, 2].map(|k| g[0] * a[k] + g[1] * b[k] + g[2] * c[k]);
-                        let (_, lt, q) = bvh.closest_point(p)?;
+                        let (_, lt, q, h) = bvh.closest_point_from(p, hint)?;
+                        hint = Some(h);
                         if level_chart[lt as usize] != chart[tri[0] as usize] {
                             return None;
                         }
