@@ -546,6 +546,10 @@ pub fn run(args: &BuildArgs) -> Result<usize> {
         bail!("no input mesh given (try `lodgen --help`)");
     }
     let inputs = expand_inputs(&args.inputs, Some(out_dir))?;
+    for i in &inputs {
+        let output = out_dir.join(&i.relative_output);
+        cli::check_report_targets(args, &i.input, &output)?;
+    }
     let total = inputs.len();
     let quiet = args.quiet;
     // on a terminal, a line saying which files are being built

@@ -354,6 +354,7 @@ fn build(
     interruptible(py, &meter, || -> anyhow::Result<String> {
         // (a report that cannot be written would leave the output behind)
         cli::check_report_path(&args)?;
+        cli::check_report_targets(&args, &input, &output)?;
         if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
             anyhow::Context::with_context(std::fs::create_dir_all(parent), || {
                 format!(

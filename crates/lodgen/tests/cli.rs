@@ -1092,6 +1092,54 @@ fn bad_values_exit_2_and_a_bad_report_path_writes_nothing() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `--report` naming the input or the output is refused before the work: the report replaced
+/// a scan with its JSON, or the `.glb` it reports on, and the run exited 0. The input and the
+/// other names of the output (`./`, the absolute path) stay as they were.
+#[test]
+fn a_report_never_overwrites_the_input_or_the_output() {
+    let d = tmp("report-targets");
+    let input = d.join("torus.obj");
+    write_torus_obj(&input);
+    let before = std::fs::read(&input).unwrap();
+    let out = d.join("t.glb");
+    let i = input.to_str().unwrap();
+    let o_arg = out.to_str().unwrap();
+    let dotted = d.join(".").join("t.glb");
+    for (report, what) in [
+        (i, "input"),
+        (o_arg, "output"),
+        (dotted.to_str().unwrap(), "output"),
+    ] {
+        let o = lodgen(&[i, "-o", o_arg, "--report", report, "-q"]);
+        assert_eq!(o.status.code(), Some(1), "{report}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("would overwrite the {what}")),
+            "{report}: {e}"
+        );
+        assert_eq!(std::fs::read(&input).unwrap(), before, "the input changed");
+        assert!(!out.exists(), "{report}: the output was written");
+    }
+    // batch: a report among the inputs
+    let out_dir = d.join("out");
+    let o = lodgen(&[
+        i,
+        "--out-dir",
+        out_dir.to_str().unwrap(),
+        "--report",
+        i,
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("would overwrite the input"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(&input).unwrap(), before, "the input changed");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// Ratios are of the welded, cleaned mesh: with every face written twice
 /// (the duplicates dropped), `2%` is 2 % of the torus's own triangles, the
 /// count the 50 % and 10 % levels are taken of too. (Fails when the run

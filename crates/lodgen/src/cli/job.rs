@@ -73,15 +73,7 @@ pub fn build_file_metered(
     }
     // (before the work, which a bad output path would throw away)
     gltf_out::check_output_path(output).with_context(|| format!("writing {}", output.display()))?;
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            bail!(
-                "writing {}: the directory {} does not exist",
-                output.display(),
-                dir.display()
-            );
-        }
-    }
+    super::check_parent_dir(output, "the output")?;
     on_progress(Progress::Reading);
     let t_read = Instant::now();
     let read_opts = io::ReadOptions {
@@ -196,6 +188,19 @@ fn same_file(a: &Path, b: &Path) -> bool {
         }
     }
     false
+}
+
+/// Whether `a` and `b` name one file, existing or not: [`same_file`], or the same name in
+/// one directory (after links and `.` / `..` are resolved) for a file not yet written.
+pub(crate) fn same_place(a: &Path, b: &Path) -> bool {
+    if same_file(a, b) {
+        return true;
+    }
+    let dir = |p: &Path| {
+        let d = p.parent().filter(|d| !d.as_os_str().is_empty());
+        std::fs::canonicalize(d.unwrap_or(Path::new("."))).ok()
+    };
+    a.file_name() == b.file_name() && dir(a).is_some() && dir(a) == dir(b)
 }
 
 /// The builds and every chain to write: with `strict` the first mesh that

@@ -32,6 +32,7 @@ pub use measure::{
     check_sample_count, measure_files, measure_report, merged_mesh, MAX_AREA_SAMPLES,
 };
 pub use output::{
-    build, check_report_path, report_to_stdout, stop_note, table, write_atomically, write_report,
+    build, check_parent_dir, check_report_path, check_report_targets, report_to_stdout, stop_note,
+    table, write_atomically, write_report,
 };
 pub use progress::BatchProgress;

@@ -13,7 +13,7 @@ use crate::lod::MeshBuild;
 use crate::summary;
 
 use super::args::{default_output, BuildArgs};
-use super::job::{build_file, build_file_metered, BuiltFile};
+use super::job::{build_file, build_file_metered, same_place, BuiltFile};
 use super::progress::Spinner;
 
 impl BuiltFile {
@@ -31,6 +31,7 @@ impl BuiltFile {
 /// returns the number of warnings (each printed to stderr as `warning: …`).
 pub fn build(input: &Path, args: &BuildArgs, show_progress: bool) -> Result<usize> {
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    check_report_targets(args, input, &output)?;
     let t0 = Instant::now();
     let built = if show_progress {
         with_spinner(input, &output, args)?
@@ -267,12 +268,55 @@ pub fn check_report_path(args: &BuildArgs) -> Result<()> {
     if path.is_dir() {
         bail!("writing the report {}: it is a directory", path.display());
     }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+    check_parent_dir(path, "the report")
+}
+
+/// `path`'s directory exists and takes a new file (`what` names the file in the error): a
+/// read-only directory is found before the work, not after it.
+pub fn check_parent_dir(path: &Path, what: &str) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Some(dir) = dir {
         if !dir.is_dir() {
             bail!(
-                "writing the report {}: the directory {} does not exist",
+                "writing {what} {}: the directory {} does not exist",
                 path.display(),
                 dir.display()
+            );
+        }
+    }
+    let dir = dir.unwrap_or(Path::new("."));
+    let probe = dir.join(format!(".lodgen-probe-{}", std::process::id()));
+    let made = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe);
+    match made {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        // (another run's probe of the same name: the directory takes files)
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => bail!(
+            "writing {what} {}: cannot create a file in {}: {e}",
+            path.display(),
+            dir.display()
+        ),
+    }
+}
+
+/// The `--report` path names neither the input nor the output (the report would replace
+/// it: `--report scan.ply`, `--report x.glb -o x.glb`).
+pub fn check_report_targets(args: &BuildArgs, input: &Path, output: &Path) -> Result<()> {
+    let Some(path) = args.report.as_deref().filter(|p| *p != Path::new("-")) else {
+        return Ok(());
+    };
+    for (what, other) in [("input", input), ("output", output)] {
+        if same_place(path, other) {
+            bail!(
+                "the report {} would overwrite the {what} {}",
+                path.display(),
+                other.display()
             );
         }
     }
