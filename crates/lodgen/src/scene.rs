@@ -64,6 +64,15 @@ pub enum Origin {
     /// OBJ, PLY, SMF or a mesh generated in code: one node per mesh.
     #[default]
     Flat,
+    /// As [`Origin::Flat`], read far from the origin (a scan in UTM or earth-centred
+    /// coordinates): every position was moved by `−offset` before it became `f32`, where
+    /// `f32` keeps the mesh's own detail (at 5·10⁶ m it steps by 0.5 m); the writer puts
+    /// `offset` back as each node's translation (`f64` in the JSON). See
+    /// [`crate::io::FAR_COORDINATE`].
+    Moved {
+        /// The file's coordinates of the positions' origin.
+        offset: [f64; 3],
+    },
     /// glTF / GLB: the parsed document and its binary buffers, so the writer
     /// can copy nodes, transforms, materials, images and samplers.
     Gltf {

@@ -1230,3 +1230,77 @@ fn an_lod_file_is_made_again_from_its_finest_level() {
     assert_eq!(level_triangles(&rep).len(), 3, "{rep}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A scan in UTM coordinates (a torus of radius 1 at x 512,345.678, y 5,412,345.678) as a
+/// binary double PLY and as an OBJ: read moved to its first vertex (rounded), written with
+/// that offset in its nodes' translation, so every vertex is where the file put it (to
+/// 10⁻⁴), none merged, and `lodgen measure` finds the written full level on the input (also
+/// through `--quantize`'s node transforms). Read straight into `f32`, whose step there is
+/// 0.5, the torus fell apart: its vertices merged, the run took minutes.
+#[test]
+fn a_scan_far_from_the_origin_keeps_its_detail() {
+    let d = tmp("far-scan");
+    let m = lodgen_pm::shapes::torus(1.0, 0.35, 48, 24);
+    let at = [512_345.678, 5_412_345.678, 312.345];
+    let far: Vec<[f64; 3]> = m
+        .positions
+        .iter()
+        .map(|p| std::array::from_fn(|k| f64::from(p[k]) + at[k]))
+        .collect();
+    let mut ply = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\n\
+         property double y\nproperty double z\nelement face {}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        far.len(),
+        m.triangles.len()
+    )
+    .into_bytes();
+    for p in &far {
+        p.iter().for_each(|x| ply.extend(x.to_le_bytes()));
+    }
+    for t in &m.triangles {
+        ply.push(3);
+        t.iter().for_each(|&v| ply.extend((v as i32).to_le_bytes()));
+    }
+    let mut obj = String::new();
+    for p in &far {
+        obj += &format!("v {:.9} {:.9} {:.9}\n", p[0], p[1], p[2]);
+    }
+    for t in &m.triangles {
+        obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    let (ply_path, obj_path) = (d.join("scan.ply"), d.join("scan.obj"));
+    std::fs::write(&ply_path, ply).unwrap();
+    std::fs::write(&obj_path, obj).unwrap();
+    for input in [&ply_path, &obj_path] {
+        for quantize in [false, true] {
+            let out = d.join("out.glb");
+            let mut args = vec![input.to_str().unwrap(), "--levels", "100%,10%", "-q"];
+            args.extend(["-o", out.to_str().unwrap()]);
+            if quantize {
+                args.push("--quantize");
+            }
+            let o = lodgen(&args);
+            assert!(o.status.success(), "{}", stderr(&o));
+            let scene = lodgen::io::read_scene(&out).unwrap();
+            let (written, _) = lodgen::cli::world_triangles(&scene);
+            assert_eq!(written.len(), far.len(), "{input:?}: vertices merged");
+            let tolerance = if quantize { 1e-3 } else { 1e-4 };
+            for w in &written {
+                let nearest = far
+                    .iter()
+                    .map(|p| (0..3).map(|k| (p[k] - w[k]).powi(2)).sum::<f64>().sqrt())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest < tolerance,
+                    "{input:?}: {w:?} is {nearest} from the input"
+                );
+            }
+            let report = lodgen::cli::measure_report(input, &out, 2.0, true).unwrap();
+            let r: serde_json::Value = serde_json::from_str(&report).unwrap();
+            let h = r["hausdorff_percent"].as_f64().unwrap();
+            assert!(h < 0.01, "{input:?} quantize {quantize}: {h} %");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -209,6 +209,52 @@ def _mesh_arrays(vertices: Any, faces: Any = None) -> Tuple[np.ndarray, np.ndarr
     )
 
 
+#: A mesh whose first vertex has a coordinate this far from the origin is computed moved to
+#: that vertex, rounded (as the command reads such files: ``lodgen.io::FAR_COORDINATE``), and
+#: every vertex returned is moved back: a scan in UTM coordinates keeps its detail, which
+#: float32 (a step of 0.5 at 5e6) would lose.
+FAR_COORDINATE = 8192.0
+
+
+def _offset_of(vertices: Any, faces: Any = None) -> Optional[np.ndarray]:
+    """The offset a mesh is computed moved by (:data:`FAR_COORDINATE`), or None."""
+    if faces is None:
+        if isinstance(vertices, tuple) and len(vertices) == 2:
+            vertices = vertices[0]
+        elif hasattr(vertices, "vertices"):
+            vertices = vertices.vertices
+    v = np.asarray(vertices)
+    if v.ndim != 2 or not len(v) or v.dtype.kind not in "fiu":
+        return None
+    first = v[0].astype(np.float64)
+    if not np.isfinite(first).all() or np.abs(first).max() < FAR_COORDINATE:
+        return None
+    return np.round(first)
+
+
+def _moved_arrays(
+    vertices: Any, faces: Any = None, offset: Optional[np.ndarray] = None
+) -> Tuple[np.ndarray, np.ndarray, np.dtype]:
+    """:func:`_mesh_arrays` of the mesh less ``offset`` (subtracted in float64)."""
+    if offset is None:
+        return _mesh_arrays(vertices, faces)
+    if faces is None:
+        if isinstance(vertices, tuple) and len(vertices) == 2:
+            vertices, faces = vertices
+        elif hasattr(vertices, "vertices") and hasattr(vertices, "faces"):
+            vertices, faces = vertices.vertices, vertices.faces
+    v = np.asarray(vertices)
+    _, f, dtype = _mesh_arrays(v, faces)
+    return np.ascontiguousarray(v.astype(np.float64) - offset, dtype=np.float32), f, dtype
+
+
+def _moved_back(v: np.ndarray, offset: Optional[np.ndarray], dtype: Any) -> np.ndarray:
+    """Vertices computed moved by ``offset``, back where they belong, as ``dtype``."""
+    if offset is None:
+        return v.astype(dtype, copy=False)
+    return (v.astype(np.float64) + offset).astype(dtype, copy=False)
+
+
 @dataclass(frozen=True)
 class Errors:
     """Measured distance between two surfaces (area-weighted samples plus
@@ -287,10 +333,13 @@ class ProgressiveMesh:
         *,
         target_triangles: Optional[int] = None,
         _native: Any = None,
+        _offset: Optional[np.ndarray] = None,
         **options: Any,
     ) -> None:
+        self._offset = _offset
         if _native is None:
-            v, f, _ = _mesh_arrays(vertices, faces)
+            self._offset = _offset_of(vertices, faces)
+            v, f, _ = _moved_arrays(vertices, faces, self._offset)
             if target_triangles is not None:
                 t = _count(target_triangles, "target_triangles")
                 if int(target_triangles) < 0:
@@ -332,16 +381,27 @@ class ProgressiveMesh:
         """The finest mesh of the sequence with at most ``triangles``
         triangles (the base mesh if it has more): (vertices, faces)."""
         k = self._pm.splits_for_triangles(_count(triangles, "triangles"))
-        return self._pm.mesh_at_splits(k)
+        return self._back(self._pm.mesh_at_splits(k))
 
     def mesh_at_splits(self, k: int) -> Tuple[np.ndarray, np.ndarray]:
         """The mesh after ``k`` splits (clamped to ``[0, len(self)]``)."""
-        return self._pm.mesh_at_splits(_count(k, "k"))
+        return self._back(self._pm.mesh_at_splits(_count(k, "k")))
 
     @property
     def mesh(self) -> Tuple[np.ndarray, np.ndarray]:
         """The mesh at the cursor: (vertices, faces)."""
-        return self._pm.mesh()
+        return self._back(self._pm.mesh())
+
+    @property
+    def offset(self) -> Optional[np.ndarray]:
+        """Where the mesh was computed from, far from the origin (:data:`FAR_COORDINATE`):
+        the meshes this returns are moved back (float64), but the positions in
+        :attr:`splits` are relative to it. None near the origin."""
+        return None if self._offset is None else self._offset.copy()
+
+    def _back(self, mesh: Tuple[np.ndarray, np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
+        v, f = mesh
+        return (v if self._offset is None else _moved_back(v, self._offset, np.float64)), f
 
     def refine(self, n: int = 1) -> int:
         """Apply up to ``n`` more splits at the cursor (none for ``n <= 0``);
@@ -392,7 +452,7 @@ class ProgressiveMesh:
     def full_in_input_order(self) -> Tuple[np.ndarray, np.ndarray]:
         """The fully refined mesh in the welded input's own numbering:
         equal, index for index, to the mesh that was simplified."""
-        return self._pm.full_in_input_order()
+        return self._back(self._pm.full_in_input_order())
 
     @property
     def vertex_origin(self) -> np.ndarray:
@@ -466,7 +526,8 @@ def simplify(
     the bunny; ``measure=False`` skips it (same levels, the simplifier's
     estimate as ``errors.hausdorff``, ``result.measured`` false).
     """
-    v, f, dtype = _mesh_arrays(vertices, faces)
+    offset = _offset_of(vertices, faces)
+    v, f, dtype = _moved_arrays(vertices, faces, offset)
     if "max_error" not in options:
         options = {"levels": levels, **options}
     elif levels is not _DEFAULT_LEVELS:
@@ -475,10 +536,10 @@ def simplify(
     # (float64 in any byte order, or wider: float64; else float32)
     as_dtype = np.float64 if dtype.kind == "f" and dtype.itemsize >= 8 else np.float32
     result = [
-        Level(lv.astype(as_dtype, copy=False), lf.astype(np.int64), s, Errors._from(e))
+        Level(_moved_back(lv, offset, as_dtype), lf.astype(np.int64), s, Errors._from(e))
         for lv, lf, e, s in out
     ]
-    return SimplifyResult(result, ProgressiveMesh(_native=pm), note, measured)
+    return SimplifyResult(result, ProgressiveMesh(_native=pm, _offset=offset), note, measured)
 
 
 def measure(a: MeshLike, b: MeshLike, samples: float = 2.0) -> Errors:
@@ -486,8 +547,10 @@ def measure(a: MeshLike, b: MeshLike, samples: float = 2.0) -> Errors:
     ``(vertices, faces)`` tuple), as ``lodgen measure A B``: one-sided and
     symmetric Hausdorff, mean and RMS; ``samples`` area samples per
     triangle of the larger mesh, plus every vertex."""
-    av, af, _ = _mesh_arrays(a)
-    bv, bf, _ = _mesh_arrays(b)
+    # (both moved by A's offset when A is far from the origin)
+    offset = _offset_of(a)
+    av, af, _ = _moved_arrays(a, None, offset)
+    bv, bf, _ = _moved_arrays(b, None, offset)
     return Errors._from(_lodgen.measure(av, af, bv, bf, float(samples)))
 
 

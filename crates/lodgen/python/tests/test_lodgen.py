@@ -463,3 +463,26 @@ def test_a_progressive_mesh_shared_by_threads():
             break
     t.join()
     assert not errors, errors
+
+
+def test_a_mesh_far_from_the_origin_keeps_its_detail():
+    # a torus of radius 1 in UTM coordinates: float32 steps by 0.5 there; computed moved to
+    # its first vertex (rounded) and moved back, every vertex stays where it was
+    v, f = torus()
+    at = np.array([512345.678, 5412345.678, 312.345])
+    far = v + at
+    result = lodgen.simplify(far, f, levels=[1.0, 0.1])
+    full, coarse = result.levels[0], result.levels[1]
+    assert full.vertices.dtype == np.float64
+    assert len(full.vertices) == len(far), "vertices merged"
+    gap = np.abs(np.sort(full.vertices, axis=0) - np.sort(far, axis=0)).max()
+    assert gap < 1e-4, gap
+    assert np.abs(coarse.vertices - at).max() < 2.0
+    assert lodgen.measure((far, f), (coarse.vertices, coarse.faces)).hausdorff > 0
+    assert lodgen.measure((far, f), (full.vertices, full.faces)).hausdorff < 1e-4
+    pm = result.progressive
+    assert np.allclose(pm.offset, np.round(far[0]))
+    base, _ = pm.mesh_at_splits(0)
+    assert np.abs(base - at).max() < 2.0
+    replayed, _ = pm.full_in_input_order()
+    assert np.abs(np.sort(replayed, axis=0) - np.sort(far, axis=0)).max() < 1e-4

@@ -29,7 +29,8 @@ pub use errors::{error_line, error_parts};
 pub use golden::golden_summary;
 pub use job::{build_file, build_file_metered, BuiltFile, FileTimes};
 pub use measure::{
-    check_sample_count, measure_files, measure_report, merged_mesh, MAX_AREA_SAMPLES,
+    check_sample_count, measure_files, measure_report, merged_mesh, world_triangles,
+    MAX_AREA_SAMPLES,
 };
 pub use output::{
     build, check_parent_dir, check_report_path, check_report_targets, report_to_stdout, stop_note,

@@ -12,13 +12,14 @@ use crate::scene::{LodMesh, Scene, Warning};
 use super::builder::Builder;
 use super::error::WriteError;
 use super::input::{embed_images, input_err, keep_animations, keep_skins, take_array};
-use super::msft_lod::{add_lod_nodes, dequant_transform};
+use super::msft_lod::{add_lod_nodes, dequant_transform, moved};
 use super::prepare::PreparedChain;
 
 pub(super) fn flat_document(
     scene: &Scene,
     chains: &[PreparedChain],
     chain_meshes: &[Vec<usize>],
+    offset: [f64; 3],
     out: &mut Builder,
 ) -> Map<String, Value> {
     let materials: Vec<Value> = scene
@@ -35,7 +36,7 @@ pub(super) fn flat_document(
     let mut nodes = Vec::new();
     let mut roots = Vec::new();
     for (chain, meshes) in chains.iter().zip(chain_meshes) {
-        let transform = dequant_transform(chain, out.opts.quantize);
+        let transform = moved(dequant_transform(chain, out.opts.quantize), offset);
         let mut node = transform.clone();
         node.insert("name".into(), chain.name.clone().into());
         nodes.push(Value::Object(node));

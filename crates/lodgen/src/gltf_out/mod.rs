@@ -195,7 +195,8 @@ pub fn write_lods_added(
     }
 
     let mut root = match &scene.origin {
-        Origin::Flat => flat_document(scene, &chains, &chain_meshes, &mut out),
+        Origin::Flat => flat_document(scene, &chains, &chain_meshes, [0.0; 3], &mut out),
+        Origin::Moved { offset } => flat_document(scene, &chains, &chain_meshes, *offset, &mut out),
         Origin::Gltf {
             path,
             document,

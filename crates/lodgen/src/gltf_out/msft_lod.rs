@@ -62,6 +62,23 @@ pub(super) fn add_lod_nodes(
     }
 }
 
+/// `transform` (a node's) moved by `offset` ([`crate::scene::Origin::Moved`]): its
+/// translation plus `offset`, in `f64` (unchanged for a zero offset).
+pub(super) fn moved(mut transform: Map<String, Value>, offset: [f64; 3]) -> Map<String, Value> {
+    if offset == [0.0; 3] {
+        return transform;
+    }
+    let t = transform.get("translation").and_then(Value::as_array);
+    let at = |k: usize| {
+        t.and_then(|t| t.get(k))
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0)
+    };
+    let moved: [f64; 3] = std::array::from_fn(|k| at(k) + offset[k]);
+    transform.insert("translation".into(), json!(moved));
+    transform
+}
+
 pub(super) fn dequant_transform(chain: &PreparedChain, quantize: bool) -> Map<String, Value> {
     let mut m = Map::new();
     if quantize {

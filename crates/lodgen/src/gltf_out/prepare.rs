@@ -119,7 +119,7 @@ impl PreparedLevels {
 /// glTF document's.
 pub(super) fn material_count(scene: &Scene) -> usize {
     match &scene.origin {
-        Origin::Flat => scene.materials.len(),
+        Origin::Flat | Origin::Moved { .. } => scene.materials.len(),
         Origin::Gltf { document, .. } => document.materials.len(),
     }
 }

@@ -157,3 +157,54 @@ pub(super) fn compact(mut p: Primitive) -> Primitive {
         indices: p.indices,
     }
 }
+
+/// A text or binary mesh whose first vertex has a coordinate this far from the origin (in
+/// the file's units) is read moved to that vertex, rounded to whole units
+/// ([`crate::scene::Origin::Moved`]): below it `f32` still steps by less than a thousandth
+/// of a unit (2⁻¹¹ at 8,192), above it scans in UTM or earth-centred coordinates lost their
+/// detail and, merged and flattened by the rounding, took minutes to measure.
+pub const FAR_COORDINATE: f64 = 8192.0;
+
+/// The offset a file whose first vertex is `first` is read moved by ([`FAR_COORDINATE`]):
+/// `first` rounded to whole units, or `None` near the origin.
+pub fn far_offset(first: [f64; 3]) -> Option<[f64; 3]> {
+    let far = first.iter().any(|x| x.abs() >= FAR_COORDINATE);
+    far.then(|| first.map(f64::round))
+}
+
+/// Where a reader's positions are moved to, decided at the first vertex ([`FAR_COORDINATE`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Recentre {
+    decided: bool,
+    offset: Option<[f64; 3]>,
+}
+
+impl Recentre {
+    /// Decided from `first`, the first vertex's coordinates.
+    pub fn from_first(first: [f64; 3]) -> Recentre {
+        Recentre {
+            decided: true,
+            offset: far_offset(first),
+        }
+    }
+
+    /// `p` moved (the first point given decides, when nothing has).
+    #[inline]
+    pub fn apply(&mut self, p: [f64; 3]) -> [f64; 3] {
+        if !self.decided {
+            *self = Recentre::from_first(p);
+        }
+        match self.offset {
+            Some(o) => [p[0] - o[0], p[1] - o[1], p[2] - o[2]],
+            None => p,
+        }
+    }
+
+    /// The scene's origin: moved, or flat.
+    pub fn origin(&self) -> crate::scene::Origin {
+        match self.offset {
+            Some(offset) => crate::scene::Origin::Moved { offset },
+            None => crate::scene::Origin::Flat,
+        }
+    }
+}

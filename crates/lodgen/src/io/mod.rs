@@ -33,7 +33,9 @@ mod ply_binary;
 mod ply_header;
 mod smf;
 
-pub use common::{ReadOptions, DECODED_BYTES_FLOOR, DECODED_BYTES_PER_INPUT_BYTE};
+pub use common::{
+    far_offset, ReadOptions, DECODED_BYTES_FLOOR, DECODED_BYTES_PER_INPUT_BYTE, FAR_COORDINATE,
+};
 pub use error::{ErrorKind, Location, ReadError};
 pub(crate) use gltf_data::decode_base64;
 pub use gltf_data::encode_base64;

@@ -34,9 +34,10 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
+use super::common::far_offset;
 use super::common::{check_not_empty, file_stem, lines};
 use super::error::{ErrorKind, Location, ReadError};
-use super::obj_parse::{parse_batch, Chunk, Counts, Event, CHUNK_BYTES, NONE};
+use super::obj_parse::{first_vertex, parse_batch, Chunk, Counts, Event, CHUNK_BYTES, NONE};
 use crate::scene::{Material, Origin, Primitive, Scene, SourceMesh, Warning};
 
 /// How much of a file is read and parsed at once (whole lines; a longer
@@ -56,7 +57,8 @@ pub fn read_obj_with_materials(
     load_mtl: impl FnMut(&str) -> Option<Vec<u8>>,
 ) -> Result<Scene, ReadError> {
     let mut b = Builder::new(path, load_mtl);
-    let (chunks, _) = parse_batch(src, Counts::default(), CHUNK_BYTES, path);
+    b.offset = first_vertex(src).and_then(far_offset);
+    let (chunks, _) = parse_batch(src, Counts::default(), CHUNK_BYTES, path, b.offset);
     b.add_chunks(chunks)?;
     b.finish()
 }
@@ -129,6 +131,9 @@ fn read_obj_batches(
     let mut counts = Counts::default();
     let mut capacity = batch_bytes.max(buf.len());
     let mut batch = read_batch(buf, &mut file, &mut capacity).map_err(io_err)?;
+    // (a file whose first `v` is beyond the first batch is read where it is)
+    b.offset = first_vertex(&batch.buf[..batch.cut]).and_then(far_offset);
+    let offset = b.offset;
     let mut pending: Option<Vec<Chunk>> = None;
     let mut spare: Vec<u8> = Vec::new();
     loop {
@@ -148,7 +153,7 @@ fn read_obj_batches(
                 });
                 (added, next)
             },
-            || parse_batch(&buf[..cut], counts, chunk_bytes, path),
+            || parse_batch(&buf[..cut], counts, chunk_bytes, path, offset),
         );
         added?;
         counts = after;
@@ -308,6 +313,8 @@ struct Builder<'a, L> {
     mtl_maps: BTreeMap<String, Vec<String>>,
     /// What the scene will not carry (missing libraries, texture maps).
     warnings: Vec<Warning>,
+    /// Subtracted from every position (far from the origin: `Origin::Moved`).
+    offset: Option<[f64; 3]>,
     pending_name: Option<String>,
     current_material: Option<usize>,
     current_mesh: Option<usize>,
@@ -332,6 +339,7 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             mtl_colors: BTreeMap::new(),
             mtl_maps: BTreeMap::new(),
             warnings: Vec::new(),
+            offset: None,
             pending_name: None,
             current_material: None,
             current_mesh: None,
@@ -579,7 +587,10 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
         let scene = Scene {
             meshes,
             materials,
-            origin: Origin::Flat,
+            origin: match self.offset {
+                Some(offset) => Origin::Moved { offset },
+                None => Origin::Flat,
+            },
             warnings: self.warnings,
         };
         check_not_empty(&scene, self.path)?;

@@ -74,6 +74,7 @@ pub(super) fn parse_batch(
     base: Counts,
     chunk_bytes: usize,
     path: &Path,
+    offset: Option<[f64; 3]>,
 ) -> (Vec<Chunk>, Counts) {
     let ranges = cut(bytes, chunk_bytes);
     // every chunk but the last needs its counts, for the ones after it
@@ -96,7 +97,7 @@ pub(super) fn parse_batch(
     let chunks: Vec<Chunk> = ranges
         .par_iter()
         .zip(&starts)
-        .map(|(r, &start)| parse_chunk(&bytes[r.clone()], start, path))
+        .map(|(r, &start)| parse_chunk(&bytes[r.clone()], start, path, offset))
         .collect();
     let last = chunks.last().map_or(base, |c| {
         let start = starts[starts.len() - 1];
@@ -253,9 +254,11 @@ struct ChunkParser<'a> {
     /// The address of the token an error is about (0: none), set on the
     /// error path only: the error then names its column.
     bad: Cell<usize>,
+    /// Subtracted from every `v` in `f64` (a file far from the origin: `Origin::Moved`).
+    offset: Option<[f64; 3]>,
 }
 
-fn parse_chunk(bytes: &[u8], base: Counts, path: &Path) -> Chunk {
+fn parse_chunk(bytes: &[u8], base: Counts, path: &Path, offset: Option<[f64; 3]>) -> Chunk {
     let mut p = ChunkParser {
         out: Chunk::default(),
         path,
@@ -263,6 +266,7 @@ fn parse_chunk(bytes: &[u8], base: Counts, path: &Path) -> Chunk {
         base,
         face: Vec::new(),
         bad: Cell::new(0),
+        offset,
     };
     for line in lines(bytes) {
         p.line += 1;
@@ -291,9 +295,10 @@ impl ChunkParser<'_> {
         let (k, rest) = keyword(line);
         match k {
             Keyword::V => {
-                let p = match plain_coords(rest) {
-                    Some(p) => p,
-                    None => self.coords::<3>(rest, "vertex coordinate")?,
+                let p = match (self.offset, plain_coords(rest)) {
+                    (Some(o), _) => self.moved_coords(rest, o)?,
+                    (None, Some(p)) => p,
+                    (None, None) => self.coords::<3>(rest, "vertex coordinate")?,
                 };
                 self.out.positions.push(p);
             }
@@ -389,6 +394,38 @@ impl ChunkParser<'_> {
                 }));
             };
             *slot = self.number(token, what)?;
+        }
+        Ok(out)
+    }
+
+    /// A `v` statement's coordinates less `offset`, subtracted in `f64` (then `f32`, finite).
+    fn moved_coords(&self, rest: &[u8], offset: [f64; 3]) -> Result<[f32; 3], ReadError> {
+        let mut t = tokens(rest);
+        let mut out = [0.0f32; 3];
+        for (slot, o) in out.iter_mut().zip(offset) {
+            let Some(token) = t.next() else {
+                return Err(self.err(ErrorKind::Syntax {
+                    expected: "3 coordinates for vertex coordinate".to_owned(),
+                    found: "end of line".to_owned(),
+                }));
+            };
+            let Some(value) = fast_float2::parse::<f64, _>(token).ok() else {
+                return Err(self.err_at(
+                    token,
+                    ErrorKind::Syntax {
+                        expected: "a number for vertex coordinate".to_owned(),
+                        found: lossy(token),
+                    },
+                ));
+            };
+            *slot = (value - o) as f32;
+            if !slot.is_finite() {
+                let kind = ErrorKind::NonFinite {
+                    what: "vertex coordinate".to_owned(),
+                    value: *slot,
+                };
+                return Err(self.err_at(token, kind));
+            }
         }
         Ok(out)
     }
@@ -497,6 +534,21 @@ impl ChunkParser<'_> {
             }
         }
     }
+}
+
+/// The coordinates of the first `v` statement of `bytes`, in `f64` (`None`: none, or not
+/// three numbers): where the file is, for [`crate::io::far_offset`].
+pub(super) fn first_vertex(bytes: &[u8]) -> Option<[f64; 3]> {
+    let rest = lines(bytes).find_map(|line| match keyword(line) {
+        (Keyword::V, rest) => Some(rest),
+        _ => None,
+    })?;
+    let mut t = tokens(rest);
+    let mut out = [0.0; 3];
+    for slot in &mut out {
+        *slot = fast_float2::parse::<f64, _>(t.next()?).ok()?;
+    }
+    Some(out)
 }
 
 /// `str::parse::<f32>` on bytes (both round correctly; what they accept
@@ -660,6 +712,7 @@ mod tests {
             base,
             face: Vec::new(),
             bad: Cell::new(0),
+            offset: None,
         };
         let counts = (9, 5, 4);
         let faces = [

@@ -18,11 +18,11 @@
 
 use std::path::Path;
 
-use super::common::{check_not_empty, compact, file_stem};
+use super::common::{check_not_empty, compact, file_stem, Recentre};
 use super::error::{ErrorKind, Location, ReadError};
 use super::ply_binary;
 use super::ply_header::{decode, invalid, parse_header, Element, Encoding, Kind, Role, Scalar};
-use crate::scene::{Origin, Primitive, Scene, SourceMesh};
+use crate::scene::{Primitive, Scene, SourceMesh};
 
 /// Reads a PLY file from its bytes; `path` names it in errors.
 pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
@@ -48,6 +48,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
     let mut indices: Vec<u32> = Vec::new();
     let mut list: Vec<f64> = Vec::new();
     let mut resolved: Vec<u32> = Vec::new();
+    let mut recentre = Recentre::default();
 
     for element in &elements {
         let roles = if element.name == "vertex" {
@@ -72,6 +73,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
             if element.name == "vertex" && all_scalar {
                 let out = ply_binary::VertexArrays {
                     positions: &mut positions,
+                    recentre: &mut recentre,
                     normals: has_normals.then_some(&mut normals),
                     texcoords: has_uv.then_some(&mut texcoords),
                     colors: has_colors.then_some(&mut colors),
@@ -91,7 +93,12 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                 read_record(&mut body, element, index, &roles, index_list, &mut list)?;
             body.end(&element.name, index)?;
             if element.name == "vertex" {
-                positions.push(finite3(p, &body, index, "vertex coordinate")?);
+                positions.push(finite3(
+                    recentre.apply(p),
+                    &body,
+                    index,
+                    "vertex coordinate",
+                )?);
                 if has_normals {
                     normals.push(finite3(n, &body, index, "normal")?);
                 }
@@ -126,7 +133,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
             primitives: vec![primitive],
         }],
         materials: Vec::new(),
-        origin: Origin::Flat,
+        origin: recentre.origin(),
         warnings: Vec::new(),
     };
     check_not_empty(&scene, path)?;

@@ -7,12 +7,15 @@
 
 use std::path::Path;
 
+use super::common::Recentre;
 use super::error::{ErrorKind, Location, ReadError};
 use super::ply_header::{decode, Element, Kind, Role, Scalar};
 
 /// Where the vertex values go (`None`: the file has no such property).
 pub(super) struct VertexArrays<'a> {
     pub positions: &'a mut Vec<[f32; 3]>,
+    /// Where positions are moved to (far from the origin).
+    pub recentre: &'a mut Recentre,
     pub normals: Option<&'a mut Vec<[f32; 3]>>,
     pub texcoords: Option<&'a mut Vec<[f32; 2]>>,
     /// RGBA in [0, 1] (alpha 1 when the file has none).
@@ -77,6 +80,7 @@ pub(super) fn vertices(
     let present = element.count.min(whole);
     let VertexArrays {
         positions,
+        recentre,
         mut normals,
         mut texcoords,
         mut colors,
@@ -98,7 +102,8 @@ pub(super) fn vertices(
                 let b = &record[offset..offset + 4];
                 p[k] = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
             }
-            positions.push(finite(p.map(f64::from), here, "vertex coordinate")?);
+            let p = recentre.apply(p.map(f64::from));
+            positions.push(finite(p, here, "vertex coordinate")?);
             continue;
         }
         let (mut p, mut n, mut uv) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
@@ -113,7 +118,7 @@ pub(super) fn vertices(
                 Role::Skip => {}
             }
         }
-        positions.push(finite(p, here, "vertex coordinate")?);
+        positions.push(finite(recentre.apply(p), here, "vertex coordinate")?);
         if let Some(normals) = normals.as_deref_mut() {
             normals.push(finite(n, here, "normal")?);
         }
