@@ -364,3 +364,28 @@ fn every_prefix_is_handled() {
         let _ = read_obj(&text.as_bytes()[..len], Path::new("cut.obj"));
     }
 }
+
+/// `v x y z r g b` (MeshLab's and scanners' vertex colours) become COLOR_0, alpha 1:
+/// components above 1 read as 0–255, a `v` without a colour white, `v x y z w` no colour, a
+/// comment no colour. They were dropped without a word.
+#[test]
+fn vertex_colours_after_the_coordinates_are_read() {
+    let s = obj(
+        "v 0 0 0 1 0 0\nv 1 0 0 0 255 0\nv 0 1 0\nv 1 1 0 1.0 # w\nv 1 1 1 0 0 0.5\n\
+                 f 1 2 3\nf 2 4 3\nf 2 5 4\n",
+    );
+    let p = only_prim(&s);
+    let colors = p.colors.as_ref().expect("COLOR_0");
+    let at = |x: [f32; 3]| colors[p.positions.iter().position(|&q| q == x).unwrap()];
+    assert_eq!(at([0.0, 0.0, 0.0]), [1.0, 0.0, 0.0, 1.0]);
+    assert_eq!(at([1.0, 0.0, 0.0]), [0.0, 1.0, 0.0, 1.0]);
+    assert_eq!(at([0.0, 1.0, 0.0]), [1.0, 1.0, 1.0, 1.0]);
+    assert_eq!(at([1.0, 1.0, 0.0]), [1.0, 1.0, 1.0, 1.0]);
+    assert_eq!(at([1.0, 1.0, 1.0]), [0.0, 0.0, 0.5, 1.0]);
+    // no colour anywhere: none
+    assert!(
+        only_prim(&obj("v 0 0 0 1\nv 1 0 0\nv 0 1 0 # x y z\nf 1 2 3\n"))
+            .colors
+            .is_none()
+    );
+}

@@ -357,6 +357,12 @@ fn vertex_colours_are_read() {
     }
     text += "3 0 1 2\n";
     assert_eq!(prim(&ply(text.as_bytes())).colors, Some(want.clone()));
+    // `diffuse_red`… (Stanford's scans): the same colours
+    let diffuse = text.replace(" red\n", " diffuse_red\n");
+    let diffuse = diffuse.replace(" green\n", " diffuse_green\n");
+    let diffuse = diffuse.replace(" blue\n", " diffuse_blue\n");
+    assert!(diffuse.contains("diffuse_green"));
+    assert_eq!(prim(&ply(diffuse.as_bytes())).colors, Some(want.clone()));
     // binary, both endiannesses, through the record loop and the fast path
     for big in [false, true] {
         let format = if big {

@@ -295,6 +295,8 @@ struct Builder<'a, L> {
     path: &'a Path,
     load_mtl: L,
     positions: Vec<[f32; 3]>,
+    /// Per `v`, its `v x y z r g b` colour (empty: no `v` has one).
+    colors: Vec<[f32; 3]>,
     texcoords: Vec<[f32; 2]>,
     normals: Vec<[f32; 3]>,
     /// Per `v`: first wedge of its chain, or `NONE`; while `simple`, the
@@ -327,6 +329,7 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             path,
             load_mtl,
             positions: Vec::new(),
+            colors: Vec::new(),
             texcoords: Vec::new(),
             normals: Vec::new(),
             head: Vec::new(),
@@ -360,6 +363,12 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
     }
 
     fn add_chunk(&mut self, mut c: Chunk) {
+        // (colours, once a `v` has one: white for the positions without)
+        if !c.colors.is_empty() || !self.colors.is_empty() {
+            self.colors.resize(self.positions.len(), [1.0; 3]);
+            c.colors.resize(c.positions.len(), [1.0; 3]);
+            self.colors.append(&mut c.colors);
+        }
         self.positions.append(&mut c.positions);
         self.head.resize(self.positions.len(), NONE);
         self.texcoords.append(&mut c.texcoords);
@@ -568,22 +577,23 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
             })
             .collect();
         let mut prims: Vec<Option<PrimBuilder>> = self.prims.into_iter().map(Some).collect();
-        let meshes =
-            self.meshes
-                .into_iter()
-                .map(|m| {
-                    // (sized exactly: `filter_map(..).collect()` reserves four `Primitive`s, ~1.6 KB,
-                    // which made an object per face cost 160 bytes per input byte)
-                    let mut primitives = Vec::with_capacity(m.prims.len());
-                    primitives.extend(m.prims.iter().filter_map(|&p| prims[p].take()).map(|p| {
-                        build_primitive(p, &self.positions, &self.texcoords, &self.normals)
-                    }));
-                    SourceMesh {
-                        name: m.name,
-                        primitives,
-                    }
-                })
-                .collect();
+        let meshes = self
+            .meshes
+            .into_iter()
+            .map(|m| {
+                // (sized exactly: `filter_map(..).collect()` reserves four `Primitive`s, ~1.6 KB,
+                // which made an object per face cost 160 bytes per input byte)
+                let mut primitives = Vec::with_capacity(m.prims.len());
+                primitives.extend(m.prims.iter().filter_map(|&p| prims[p].take()).map(|p| {
+                    let colors = (!self.colors.is_empty()).then_some(&self.colors[..]);
+                    build_primitive(p, &self.positions, colors, &self.texcoords, &self.normals)
+                }));
+                SourceMesh {
+                    name: m.name,
+                    primitives,
+                }
+            })
+            .collect();
         let scene = Scene {
             meshes,
             materials,
@@ -601,6 +611,7 @@ impl<'a, L: FnMut(&str) -> Option<Vec<u8>>> Builder<'a, L> {
 fn build_primitive(
     p: PrimBuilder,
     positions: &[[f32; 3]],
+    colors: Option<&[[f32; 3]]>,
     texcoords: &[[f32; 2]],
     normals: &[[f32; 3]],
 ) -> Primitive {
@@ -617,6 +628,14 @@ fn build_primitive(
                 .collect()
         }),
         normals: has_normals.then(|| p.verts_vn.iter().map(|&n| normals[n as usize]).collect()),
+        colors: colors.map(|c| {
+            let at = |v: u32| c.get(v as usize).copied().unwrap_or([1.0; 3]);
+            p.verts
+                .iter()
+                .map(|&v| at(v))
+                .map(|[r, g, b]| [r, g, b, 1.0])
+                .collect()
+        }),
         indices: p.indices,
         ..Primitive::default()
     }

@@ -20,7 +20,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::error::{ErrorKind, Location, ReadError};
-use super::obj_plain::{is_space, plain_coords, plain_face, plain_texcoord};
+use super::obj_plain::{is_space, lossy, plain_coords, plain_face, plain_texcoord, tokens};
 
 pub(super) use super::obj_plain::NONE;
 
@@ -51,6 +51,9 @@ pub(super) enum Event {
 #[derive(Debug, Default)]
 pub(super) struct Chunk {
     pub positions: Vec<[f32; 3]>,
+    /// `v x y z r g b` colours, one per position once a `v` of the chunk has one (white
+    /// before it; empty when none has).
+    pub colors: Vec<[f32; 3]>,
     /// `[u, 1 - v]` (glTF's convention).
     pub texcoords: Vec<[f32; 2]>,
     pub normals: Vec<[f32; 3]>,
@@ -209,41 +212,6 @@ fn count(bytes: &[u8]) -> Counts {
     c
 }
 
-/// The ASCII-whitespace separated tokens of `s`.
-fn tokens(s: &[u8]) -> Tokens<'_> {
-    Tokens { rest: s }
-}
-
-struct Tokens<'a> {
-    rest: &'a [u8],
-}
-
-impl<'a> Iterator for Tokens<'a> {
-    type Item = &'a [u8];
-
-    #[inline]
-    fn next(&mut self) -> Option<&'a [u8]> {
-        let mut s = self.rest;
-        while let [first, tail @ ..] = s {
-            if !is_space(*first) {
-                break;
-            }
-            s = tail;
-        }
-        if s.is_empty() {
-            self.rest = s;
-            return None;
-        }
-        let end = s.iter().position(|&b| is_space(b)).unwrap_or(s.len());
-        self.rest = &s[end..];
-        Some(&s[..end])
-    }
-}
-
-fn lossy(t: &[u8]) -> String {
-    String::from_utf8_lossy(t).into_owned()
-}
-
 /// Parsing one chunk: its output, where it is, and the face scratch.
 struct ChunkParser<'a> {
     out: Chunk,
@@ -295,12 +263,17 @@ impl ChunkParser<'_> {
         let (k, rest) = keyword(line);
         match k {
             Keyword::V => {
-                let p = match (self.offset, plain_coords(rest)) {
-                    (Some(o), _) => self.moved_coords(rest, o)?,
+                let (p, end) = match (self.offset, plain_coords(rest)) {
+                    (Some(o), _) => (self.moved_coords(rest, o)?, 0),
                     (None, Some(p)) => p,
-                    (None, None) => self.coords::<3>(rest, "vertex coordinate")?,
+                    (None, None) => (self.coords::<3>(rest, "vertex coordinate")?, 0),
                 };
                 self.out.positions.push(p);
+                // (after three plain decimals, usually the line's end)
+                let tail = &rest[end..];
+                if tail.iter().any(|&b| !is_space(b)) {
+                    self.vertex_colour(rest)?;
+                }
             }
             Keyword::Vt => {
                 let t = match plain_texcoord(rest) {
@@ -311,7 +284,7 @@ impl ChunkParser<'_> {
             }
             Keyword::Vn => {
                 let n = match plain_coords(rest) {
-                    Some(n) => n,
+                    Some((n, _)) => n,
                     None => self.coords::<3>(rest, "normal")?,
                 };
                 self.out.normals.push(n);
@@ -396,6 +369,31 @@ impl ChunkParser<'_> {
             *slot = self.number(token, what)?;
         }
         Ok(out)
+    }
+
+    /// `v x y z r g b` (MeshLab's and most scanners' vertex colours; components above 1 are
+    /// taken as 0–255): the colour of the position just read. Three numbers after the
+    /// coordinates make a colour; one (`w`) or none do not.
+    fn vertex_colour(&mut self, rest: &[u8]) -> Result<(), ReadError> {
+        let more: Vec<&[u8]> = tokens(rest)
+            .skip(3)
+            .take_while(|t| !t.starts_with(b"#"))
+            .collect();
+        if more.len() < 3 {
+            return Ok(());
+        }
+        let mut c = [0.0f32; 3];
+        for (slot, token) in c.iter_mut().zip(&more) {
+            *slot = self.number(token, "vertex colour")?;
+        }
+        if c.iter().any(|&x| x > 1.0) {
+            c = c.map(|x| x / 255.0);
+        }
+        self.out
+            .colors
+            .resize(self.out.positions.len() - 1, [1.0; 3]);
+        self.out.colors.push(c);
+        Ok(())
     }
 
     /// A `v` statement's coordinates less `offset`, subtracted in `f64` (then `f32`, finite).
@@ -763,7 +761,7 @@ mod tests {
             " 1 2 3x",
         ];
         for line in coords {
-            if let Some(c) = plain_coords(line.as_bytes()) {
+            if let Some((c, _)) = plain_coords(line.as_bytes()) {
                 let g = p
                     .coords::<3>(line.as_bytes(), "x")
                     .map(|c| c.map(f32::to_bits));

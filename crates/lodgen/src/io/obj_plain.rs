@@ -99,9 +99,9 @@ fn plain_decimal(s: &[u8]) -> Option<(f32, usize)> {
 }
 
 /// `v` / `vn` with three plain decimals (what follows them is ignored, as
-/// in [`ChunkParser::coords`]).
+/// in [`ChunkParser::coords`]), and where they end in `rest`.
 #[inline]
-pub(super) fn plain_coords(rest: &[u8]) -> Option<[f32; 3]> {
+pub(super) fn plain_coords(rest: &[u8]) -> Option<([f32; 3], usize)> {
     let mut out = [0.0f32; 3];
     let mut i = 0;
     for slot in &mut out {
@@ -110,7 +110,7 @@ pub(super) fn plain_coords(rest: &[u8]) -> Option<[f32; 3]> {
         *slot = x;
         i += n;
     }
-    Some(out)
+    Some((out, i))
 }
 
 /// `vt u [v]` with plain decimals, as `[u, 1 - v]`.
@@ -188,6 +188,42 @@ pub(super) fn plain_face(
         face.push(corner);
     }
     (face.len() >= 3).then_some(())
+}
+
+/// The ASCII-whitespace separated tokens of `s`.
+pub(super) fn tokens(s: &[u8]) -> Tokens<'_> {
+    Tokens { rest: s }
+}
+
+pub(super) struct Tokens<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let mut s = self.rest;
+        while let [first, tail @ ..] = s {
+            if !is_space(*first) {
+                break;
+            }
+            s = tail;
+        }
+        if s.is_empty() {
+            self.rest = s;
+            return None;
+        }
+        let end = s.iter().position(|&b| is_space(b)).unwrap_or(s.len());
+        self.rest = &s[end..];
+        Some(&s[..end])
+    }
+}
+
+/// A token as text, for an error message.
+pub(super) fn lossy(t: &[u8]) -> String {
+    String::from_utf8_lossy(t).into_owned()
 }
 
 #[cfg(test)]

@@ -320,13 +320,15 @@ fn vertex_roles(element: &Element, path: &Path) -> Result<Vec<Role>, ReadError> 
             roles[c] = Role::Normal(2);
         }
     }
-    let rgb = [find("red"), find("green"), find("blue")];
+    // (`diffuse_red`…: the Stanford scanning repository's and some scanners' names)
+    let named = |c: &str| find(c).or_else(|| find(&format!("diffuse_{c}")));
+    let rgb = [named("red"), named("green"), named("blue")];
     if let [Some(r), Some(g), Some(b)] = rgb {
         if scalar(r) && scalar(g) && scalar(b) {
             roles[r] = Role::Color(0);
             roles[g] = Role::Color(1);
             roles[b] = Role::Color(2);
-            if let Some(a) = find("alpha").filter(|&a| scalar(a)) {
+            if let Some(a) = named("alpha").filter(|&a| scalar(a)) {
                 roles[a] = Role::Color(3);
             }
         }
