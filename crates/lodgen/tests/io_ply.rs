@@ -267,6 +267,40 @@ fn binary_nan_names_the_vertex() {
     assert!(matches!(*e.kind, ErrorKind::NonFinite { .. }), "{e}");
 }
 
+/// A vertex no face uses may be invalid (NaN or infinite: a range scan's missing pixels,
+/// often its first ones): it is left out with the other unused vertices, in ascii and
+/// binary. Only a used one fails the file (`binary_nan_names_the_vertex`).
+#[test]
+fn an_invalid_vertex_no_face_uses_is_left_out() {
+    let head = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    let text = format!(
+        "{}nan nan nan\n0 0 0\n1 0 0\n0 1 0\n3 1 2 3\n",
+        head("ascii")
+    );
+    let p = prim(&ply(text.as_bytes())).clone();
+    assert_eq!(
+        p.positions,
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    );
+    assert_eq!(p.indices, [0, 1, 2]);
+    let mut bin = head("binary_little_endian").into_bytes();
+    for v in [[f64::NAN; 3], [0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for x in v {
+            put(&mut bin, "float", x, false);
+        }
+    }
+    put(&mut bin, "uchar", 3.0, false);
+    for i in 1..4 {
+        put(&mut bin, "int", i as f64, false);
+    }
+    assert_eq!(prim(&ply(&bin)).positions, p.positions);
+}
+
 const ASCII_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
     element face 1\nproperty list uchar int vertex_indices\nend_header\n";
 

@@ -188,10 +188,11 @@ impl Recentre {
         }
     }
 
-    /// `p` moved (the first point given decides, when nothing has).
+    /// `p` moved (the first finite point given decides, when nothing has: a range scan's
+    /// first pixels may be invalid).
     #[inline]
     pub fn apply(&mut self, p: [f64; 3]) -> [f64; 3] {
-        if !self.decided {
+        if !self.decided && p.iter().all(|x| x.is_finite()) {
             *self = Recentre::from_first(p);
         }
         match self.offset {

@@ -49,6 +49,9 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
     let mut list: Vec<f64> = Vec::new();
     let mut resolved: Vec<u32> = Vec::new();
     let mut recentre = Recentre::default();
+    let mut invalid: Vec<u32> = Vec::new();
+    // (an ascii body's invalid vertices' lines, for the error)
+    let mut lines: Vec<usize> = Vec::new();
 
     for element in &elements {
         let roles = if element.name == "vertex" {
@@ -74,6 +77,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                 let out = ply_binary::VertexArrays {
                     positions: &mut positions,
                     recentre: &mut recentre,
+                    invalid: &mut invalid,
                     normals: has_normals.then_some(&mut normals),
                     texcoords: has_uv.then_some(&mut texcoords),
                     colors: has_colors.then_some(&mut colors),
@@ -93,22 +97,28 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                 read_record(&mut body, element, index, &roles, index_list, &mut list)?;
             body.end(&element.name, index)?;
             if element.name == "vertex" {
-                positions.push(finite3(
-                    recentre.apply(p),
-                    &body,
-                    index,
-                    "vertex coordinate",
-                )?);
+                let p = recentre.apply(p).map(|x| x as f32);
+                // (an invalid point, attributes and all: an error only if a face uses it)
+                let bad = p.iter().any(|x| !x.is_finite());
+                if bad {
+                    invalid.push(index as u32);
+                    lines.push(body.line);
+                }
+                positions.push(p);
+                let finite3 = |v: [f64; 3], what: &str| match bad {
+                    true => Ok(v.map(|x| x as f32)),
+                    false => finite3(v, &body, index, what),
+                };
                 if has_normals {
-                    normals.push(finite3(n, &body, index, "normal")?);
+                    normals.push(finite3(n, "normal")?);
                 }
                 if has_uv {
-                    let t = finite3([uv[0], uv[1], 0.0], &body, index, "texture coordinate")?;
+                    let t = finite3([uv[0], uv[1], 0.0], "texture coordinate")?;
                     texcoords.push([t[0], 1.0 - t[1]]);
                 }
                 if has_colors {
-                    let [r, g, b] = finite3([c[0], c[1], c[2]], &body, index, "colour")?;
-                    let [a, ..] = finite3([c[3], 0.0, 0.0], &body, index, "colour")?;
+                    let [r, g, b] = finite3([c[0], c[1], c[2]], "colour")?;
+                    let [a, ..] = finite3([c[3], 0.0, 0.0], "colour")?;
                     colors.push([r, g, b, a]);
                 }
             } else if index_list.is_some() {
@@ -118,6 +128,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         }
     }
     debug_assert_eq!(positions.len(), vertex_count);
+    check_used_finite((&invalid, &lines), &positions, &indices, body.path)?;
     let primitive = compact(Primitive {
         material: None,
         normals: (!normals.is_empty()).then_some(normals),
@@ -275,6 +286,44 @@ fn add_indices(
         }
     }
     Ok(())
+}
+
+/// The first vertex of `invalid` (positions not finite: a range scan's invalid pixels) that
+/// a face uses, as an error; the others go with the vertices no face uses (`compact`).
+fn check_used_finite(
+    (invalid, lines): (&[u32], &[usize]),
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    path: &Path,
+) -> Result<(), ReadError> {
+    if invalid.is_empty() {
+        return Ok(());
+    }
+    let mut bad = vec![false; positions.len()];
+    for &v in invalid {
+        bad[v as usize] = true;
+    }
+    let Some(&v) = indices.iter().find(|&&i| bad[i as usize]) else {
+        return Ok(());
+    };
+    let value = positions[v as usize]
+        .into_iter()
+        .find(|x| !x.is_finite())
+        .unwrap_or(f32::NAN);
+    let what = "vertex coordinate (of a vertex a face uses)".to_owned();
+    // (an ascii body: the vertex's line; binary: its number)
+    let at = match invalid.binary_search(&v).ok().and_then(|k| lines.get(k)) {
+        Some(&line) => Location::Line(line),
+        None => Location::Element {
+            element: "vertex".to_owned(),
+            index: v as usize,
+        },
+    };
+    Err(ReadError::new(
+        path,
+        at,
+        ErrorKind::NonFinite { what, value },
+    ))
 }
 
 fn finite3(v: [f64; 3], body: &Body<'_>, index: usize, what: &str) -> Result<[f32; 3], ReadError> {

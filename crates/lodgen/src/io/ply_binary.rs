@@ -16,6 +16,9 @@ pub(super) struct VertexArrays<'a> {
     pub positions: &'a mut Vec<[f32; 3]>,
     /// Where positions are moved to (far from the origin).
     pub recentre: &'a mut Recentre,
+    /// The vertices whose position is not finite (a range scan's invalid pixels): an error
+    /// only when a face uses one (`ply::check_used_finite`).
+    pub invalid: &'a mut Vec<u32>,
     pub normals: Option<&'a mut Vec<[f32; 3]>>,
     pub texcoords: Option<&'a mut Vec<[f32; 2]>>,
     /// RGBA in [0, 1] (alpha 1 when the file has none).
@@ -54,6 +57,20 @@ fn finite<const N: usize>(
     }
 }
 
+/// [`finite`], or `v` as it is for an invalid point (`bad`: its position is not finite).
+fn unless<const N: usize>(
+    bad: bool,
+    v: [f64; N],
+    here: (&Path, &Element, usize),
+    what: &str,
+) -> Result<[f32; N], ReadError> {
+    if bad {
+        Ok(v.map(|x| x as f32))
+    } else {
+        finite(v, here, what)
+    }
+}
+
 /// Reads `element` (every property a scalar) from the start of `bytes`;
 /// returns the bytes it took.
 pub(super) fn vertices(
@@ -81,6 +98,7 @@ pub(super) fn vertices(
     let VertexArrays {
         positions,
         recentre,
+        invalid,
         mut normals,
         mut texcoords,
         mut colors,
@@ -102,8 +120,11 @@ pub(super) fn vertices(
                 let b = &record[offset..offset + 4];
                 p[k] = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
             }
-            let p = recentre.apply(p.map(f64::from));
-            positions.push(finite(p, here, "vertex coordinate")?);
+            let p = recentre.apply(p.map(f64::from)).map(|x| x as f32);
+            if p.iter().any(|x| !x.is_finite()) {
+                invalid.push(index as u32);
+            }
+            positions.push(p);
             continue;
         }
         let (mut p, mut n, mut uv) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
@@ -118,16 +139,22 @@ pub(super) fn vertices(
                 Role::Skip => {}
             }
         }
-        positions.push(finite(recentre.apply(p), here, "vertex coordinate")?);
+        let p = recentre.apply(p).map(|x| x as f32);
+        // (an invalid point's attributes are not checked either: it goes, or fails the file)
+        let bad = p.iter().any(|x| !x.is_finite());
+        if bad {
+            invalid.push(index as u32);
+        }
+        positions.push(p);
         if let Some(normals) = normals.as_deref_mut() {
-            normals.push(finite(n, here, "normal")?);
+            normals.push(unless(bad, n, here, "normal")?);
         }
         if let Some(texcoords) = texcoords.as_deref_mut() {
-            let t = finite(uv, here, "texture coordinate")?;
+            let t = unless(bad, uv, here, "texture coordinate")?;
             texcoords.push([t[0], 1.0 - t[1]]);
         }
         if let Some(colors) = colors.as_deref_mut() {
-            colors.push(finite(c, here, "colour")?);
+            colors.push(unless(bad, c, here, "colour")?);
         }
     }
     if present < element.count {
