@@ -301,6 +301,42 @@ fn an_invalid_vertex_no_face_uses_is_left_out() {
     assert_eq!(prim(&ply(&bin)).positions, p.positions);
 }
 
+/// Data after the last element the header declares (a face count too small) is a warning,
+/// in ascii and binary: its faces were dropped without a word.
+#[test]
+fn data_after_the_declared_elements_is_a_warning() {
+    let text = format!("{ASCII_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+    let w = &ply(text.as_bytes()).warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].message.starts_with("1 line after the last element"),
+        "{w:?}"
+    );
+    assert!(
+        ply(format!("{ASCII_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n").as_bytes())
+            .warnings
+            .is_empty()
+    );
+    let head = ASCII_HEAD.replace("ascii", "binary_little_endian");
+    let mut bin = head.into_bytes();
+    for v in [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for x in v {
+            put(&mut bin, "float", x, false);
+        }
+    }
+    for _ in 0..2 {
+        put(&mut bin, "uchar", 3.0, false);
+        for i in 0..3 {
+            put(&mut bin, "int", i as f64, false);
+        }
+    }
+    let w = &ply(&bin).warnings;
+    assert!(
+        w.len() == 1 && w[0].message.starts_with("13 bytes after"),
+        "{w:?}"
+    );
+}
+
 const ASCII_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
     element face 1\nproperty list uchar int vertex_indices\nend_header\n";
 

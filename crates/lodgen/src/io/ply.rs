@@ -22,7 +22,7 @@ use super::common::{check_not_empty, compact, file_stem, Recentre};
 use super::error::{ErrorKind, Location, ReadError};
 use super::ply_binary;
 use super::ply_header::{decode, invalid, parse_header, Element, Encoding, Kind, Role, Scalar};
-use crate::scene::{Primitive, Scene, SourceMesh};
+use crate::scene::{Primitive, Scene, SourceMesh, Warning};
 
 /// Reads a PLY file from its bytes; `path` names it in errors.
 pub fn read_ply(src: &[u8], path: &Path) -> Result<Scene, ReadError> {
@@ -102,7 +102,9 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
                 let bad = p.iter().any(|x| !x.is_finite());
                 if bad {
                     invalid.push(index as u32);
-                    lines.push(body.line);
+                    if encoding == Encoding::Ascii {
+                        lines.push(body.line);
+                    }
                 }
                 positions.push(p);
                 let finite3 = |v: [f64; 3], what: &str| match bad {
@@ -138,6 +140,17 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         indices,
         ..Primitive::default()
     });
+    one_mesh_scene(primitive, &body, recentre, path)
+}
+
+/// The scene of a PLY file: its one primitive, with the body's warning (data after the
+/// declared elements), if it draws anything.
+fn one_mesh_scene(
+    primitive: Primitive,
+    body: &Body<'_>,
+    recentre: Recentre,
+    path: &Path,
+) -> Result<Scene, ReadError> {
     let scene = Scene {
         meshes: vec![SourceMesh {
             name: file_stem(path),
@@ -145,7 +158,7 @@ fn read_ply_with(src: &[u8], path: &Path, fast: bool) -> Result<Scene, ReadError
         }],
         materials: Vec::new(),
         origin: recentre.origin(),
-        warnings: Vec::new(),
+        warnings: body.trailing().into_iter().collect(),
     };
     check_not_empty(&scene, path)?;
     Ok(scene)
@@ -432,6 +445,30 @@ impl<'a> Body<'a> {
             tokens: "".split_ascii_whitespace(),
             line: header_lines,
         }
+    }
+
+    /// A warning when data follows the last element the header declares (its counts too
+    /// small: what follows is not read).
+    fn trailing(&self) -> Option<Warning> {
+        let left = match self.encoding {
+            Encoding::Ascii => self.text.lines().filter(|l| !l.trim().is_empty()).count(),
+            _ => self.bytes.len().saturating_sub(self.pos),
+        };
+        let unit = match (self.encoding == Encoding::Ascii, left == 1) {
+            (true, true) => "line",
+            (true, false) => "lines",
+            (false, true) => "byte",
+            (false, false) => "bytes",
+        };
+        (left > 0).then(|| {
+            Warning::new(
+                "body",
+                format!(
+                    "{left} {unit} after the last element the header declares are not read \
+                     (does it count fewer vertices or faces than the file holds?)"
+                ),
+            )
+        })
     }
 
     fn location(&self, element: &str, index: usize) -> Location {
