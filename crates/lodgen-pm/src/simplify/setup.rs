@@ -625,6 +625,20 @@ mod tests {
         }
     }
 
+    /// A wedge per corner: its vertex's, or (one corner in `one_in`, xorshift from `rng`) a
+    /// wedge of its own (`v + 1000`), so that runs of corners agree and differ.
+    fn random_wedges(m: &crate::Mesh, rng: &mut u64, one_in: u64) -> Vec<[u32; 3]> {
+        let mut next = || {
+            *rng ^= *rng << 13;
+            *rng ^= *rng >> 7;
+            *rng ^= *rng << 17;
+            *rng
+        };
+        let tris = m.triangles.iter();
+        tris.map(|t| t.map(|v| if next() % one_in == 0 { v + 1000 } else { v }))
+            .collect()
+    }
+
     /// `seam_edges` (from the fans) is the sorted list of interior edges
     /// whose wedges differ, as sorting every edge finds it: random wedges
     /// (from few ids, so runs agree and differ) on meshes with borders and
@@ -643,23 +657,7 @@ mod tests {
             .iter()
             .enumerate()
         {
-            let wedges: Vec<[u32; 3]> = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    t.map(|v| {
-                        rng ^= rng << 13;
-                        rng ^= rng >> 7;
-                        rng ^= rng << 17;
-                        // most corners share their vertex's wedge
-                        if rng % 8 == 0 {
-                            v + 1000
-                        } else {
-                            v
-                        }
-                    })
-                })
-                .collect();
+            let wedges = random_wedges(m, &mut rng, 8);
             let s = Simplifier::new(m, &SimplifyOptions::DEFAULT).unwrap();
             let expected = Features::seams(&m.triangles, &wedges);
             assert!(!expected.is_empty(), "mesh {i}");
@@ -682,22 +680,7 @@ mod tests {
             .iter()
             .enumerate()
         {
-            let wedges: Vec<[u32; 3]> = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    t.map(|v| {
-                        rng ^= rng << 13;
-                        rng ^= rng >> 7;
-                        rng ^= rng << 17;
-                        if rng % 6 == 0 {
-                            v + 1000
-                        } else {
-                            v
-                        }
-                    })
-                })
-                .collect();
+            let wedges = random_wedges(m, &mut rng, 6);
             let mut s =
                 Simplifier::new(m, &SimplifyOptions::DEFAULT.with_target_triangles(8)).unwrap();
             s.set_wedges(wedges);
