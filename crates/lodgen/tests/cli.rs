@@ -1084,6 +1084,16 @@ fn bad_values_exit_2_and_a_bad_report_path_writes_nothing() {
         assert!(stderr(&o).starts_with("error: "), "{bad:?}: {}", stderr(&o));
         assert!(!out.exists());
     }
+    // an output that is no glTF file is a bad argument too (it exited 1)
+    let obj_out = d.join("t.obj");
+    let o = lodgen(&[i, "-o", obj_out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("must end in .glb or .gltf"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!obj_out.exists());
     let report = d.join("missing-dir/r.json");
     let o = lodgen(&[i, "-o", o_arg, "--report", report.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));

@@ -479,6 +479,11 @@ impl BuildArgs {
         if self.batch.jobs == 0 {
             bail!("--jobs must be at least 1");
         }
+        // (`-o x.obj`: a bad argument, refused before anything is read)
+        if let Some(output) = &self.output {
+            crate::gltf_out::check_output_path(output)
+                .with_context(|| format!("writing {}", output.display()))?;
+        }
         Ok(())
     }
 
